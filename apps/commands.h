@@ -1,0 +1,15 @@
+// One function per `hashfusion` subcommand; each adds its CLI11 subcommand and the callback that runs it.
+// A callback reports failure by throwing hf::Error; main() prints it as one line and exits 1.
+#pragma once
+
+namespace CLI {
+class App;
+}
+
+namespace hf::apps {
+
+void add_generate_command(CLI::App& app);  // apps/cmd_generate.cpp
+void add_eval_command(CLI::App& app);      // apps/cmd_eval.cpp
+void add_run_command(CLI::App& app);       // apps/cmd_run.cpp
+
+}  // namespace hf::apps

@@ -1,0 +1,27 @@
+// hashfusion: real-time RGB-D SLAM and 3D reconstruction. `hashfusion --help` lists the subcommands.
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <iostream>
+
+#include "apps/commands.h"
+#include "core/error.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"hashfusion: voxel-hashed RGB-D SLAM and 3D reconstruction"};
+  app.require_subcommand(1);
+  hf::apps::add_run_command(app);
+  hf::apps::add_generate_command(app);
+  hf::apps::add_eval_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const hf::Error& e) {
+    std::cerr << "hashfusion: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "hashfusion: internal error: " << e.what() << "\n";
+    return 2;
+  }
+  return 0;
+}

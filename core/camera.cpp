@@ -1,0 +1,152 @@
+#include "core/camera.h"
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace hf {
+namespace {
+
+const std::map<std::string, PinholeCamera>& presets() {
+  // TUM values from the TUM RGB-D "file formats" page (Kinect factory calibration, depth registered to colour).
+  static const std::map<std::string, PinholeCamera> table = {
+      {"ros", {525.0, 525.0, 319.5, 239.5, 640, 480}},
+      {"fr1", {517.3, 516.5, 318.6, 255.3, 640, 480}},
+      {"fr2", {520.9, 521.0, 325.1, 249.7, 640, 480}},
+      {"fr3", {535.4, 539.2, 320.1, 247.6, 640, 480}},
+      {"icl-nuim", {481.2, 480.0, 319.5, 239.5, 640, 480}},
+      {"7scenes", {585.0, 585.0, 320.0, 240.0, 640, 480}},
+  };
+  return table;
+}
+
+bool valid(const PinholeCamera& c) {
+  return std::isfinite(c.fx) && std::isfinite(c.fy) && std::isfinite(c.cx) && std::isfinite(c.cy) && c.fx > 0 &&
+         c.fy > 0 && c.width > 0 && c.height > 0 && c.width <= 16384 && c.height <= 16384;
+}
+
+}  // namespace
+
+Eigen::Matrix3d PinholeCamera::K() const {
+  Eigen::Matrix3d K;
+  K << fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0;
+  return K;
+}
+
+PinholeCamera PinholeCamera::scaled(int level) const {
+  PinholeCamera c = *this;
+  for (int l = 0; l < level; ++l) {
+    c.fx *= 0.5;
+    c.fy *= 0.5;
+    c.cx = (c.cx + 0.5) * 0.5 - 0.5;
+    c.cy = (c.cy + 0.5) * 0.5 - 0.5;
+    c.width /= 2;
+    c.height /= 2;
+  }
+  return c;
+}
+
+PinholeCamera PinholeCamera::preset(const std::string& name) {
+  auto it = presets().find(name);
+  if (it == presets().end()) {
+    std::string known;
+    for (const auto& [k, v] : presets()) known += (known.empty() ? "" : ", ") + k;
+    throw Error("unknown camera preset '" + name + "' (known: " + known + ")");
+  }
+  return it->second;
+}
+
+std::vector<std::string> PinholeCamera::preset_names() {
+  std::vector<std::string> names;
+  for (const auto& [k, v] : presets()) names.push_back(k);
+  return names;
+}
+
+PinholeCamera PinholeCamera::parse(const std::string& text, const std::string& file) {
+  PinholeCamera c;
+  size_t first = text.find_first_not_of(" \t\r\n");
+  if (first != std::string::npos && text[first] == '{') {
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::parse_error& e) {
+      // nlohmann reports a byte offset; turn it into a line number for the message.
+      const size_t byte = std::min<size_t>(e.byte, text.size());
+      const int line = 1 + int(std::count(text.begin(), text.begin() + long(byte), '\n'));
+      throw ParseError(file, line, "expected a JSON camera object");
+    }
+    auto num = [&](const char* key) -> double {
+      if (!j.contains(key) || !j[key].is_number()) throw ParseError(file, 0, std::string("expected a number '") + key + "'");
+      return j[key].get<double>();
+    };
+    c.fx = num("fx");
+    c.fy = num("fy");
+    c.cx = num("cx");
+    c.cy = num("cy");
+    const double w = num("width"), h = num("height");
+    if (!(w >= 1 && w <= 16384 && h >= 1 && h <= 16384)) throw ParseError(file, 0, "expected width and height in 1..16384");
+    c.width = int(w);
+    c.height = int(h);
+  } else {
+    std::istringstream in(text);
+    std::string line;
+    int lineno = 0;
+    std::map<std::string, double> values;
+    while (std::getline(in, line)) {
+      ++lineno;
+      const size_t hash = line.find('#');
+      if (hash != std::string::npos) line.resize(hash);
+      std::istringstream ls(line);
+      std::string key;
+      if (!(ls >> key)) continue;
+      double value;
+      if (!(ls >> value) || !std::isfinite(value)) throw ParseError(file, lineno, "expected '" + key + " <number>', got '" + line + "'");
+      std::string rest;
+      if (ls >> rest) throw ParseError(file, lineno, "expected one value after '" + key + "', got '" + rest + "'");
+      static const char* keys[] = {"fx", "fy", "cx", "cy", "width", "height"};
+      if (std::find(std::begin(keys), std::end(keys), key) == std::end(keys))
+        throw ParseError(file, lineno, "expected one of fx fy cx cy width height, got '" + key + "'");
+      values[key] = value;
+    }
+    for (const char* key : {"fx", "fy", "cx", "cy", "width", "height"}) {
+      if (!values.count(key)) throw ParseError(file, 0, std::string("missing '") + key + "'");
+    }
+    c.fx = values["fx"];
+    c.fy = values["fy"];
+    c.cx = values["cx"];
+    c.cy = values["cy"];
+    if (!(values["width"] >= 1 && values["width"] <= 16384 && values["height"] >= 1 && values["height"] <= 16384))
+      throw ParseError(file, 0, "expected width and height in 1..16384");
+    c.width = int(values["width"]);
+    c.height = int(values["height"]);
+  }
+  if (!valid(c)) throw ParseError(file, 0, "expected finite fx, fy > 0, cx, cy and a positive size");
+  return c;
+}
+
+PinholeCamera PinholeCamera::load(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(path + ": cannot open camera file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse(ss.str(), path);
+}
+
+void PinholeCamera::save(const std::string& path) const {
+  nlohmann::json j = {{"fx", fx}, {"fy", fy}, {"cx", cx}, {"cy", cy}, {"width", width}, {"height", height}};
+  write_file_atomically(path, [&](std::ostream& out) { out << j.dump(2) << "\n"; });
+}
+
+std::string PinholeCamera::describe() const {
+  std::ostringstream s;
+  s << "fx=" << fx << " fy=" << fy << " cx=" << cx << " cy=" << cy << " " << width << "x" << height;
+  return s.str();
+}
+
+}  // namespace hf

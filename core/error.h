@@ -1,0 +1,27 @@
+// Errors that carry where they happened. The CLI prints what() as one line on stderr and exits non-zero.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace hf {
+
+// Any failure a user can act on: missing file, bad argument, unsupported format.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Malformed input in a file: what() reads "FILE:LINE: expected ..., got '...'" (line 0 = whole file).
+class ParseError : public Error {
+ public:
+  ParseError(const std::string& file, int line, const std::string& message);
+  const std::string& file() const { return file_; }
+  int line() const { return line_; }
+
+ private:
+  std::string file_;
+  int line_;
+};
+
+}  // namespace hf

@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# First README command: set up, build in Release, run the main job on the embedded default (a synthetic room
+# sequence generated on the fly) and print where the outputs are.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+bash scripts/setup.sh
+bash scripts/build.sh release
+out="${HF_DEMO_OUT:-$PWD/out/demo}"
+./build/release/apps/hashfusion run --input synthetic:room --out "$out" "$@"
