@@ -1,10 +1,16 @@
-// Temporary: subcommands not yet written. Each owner replaces its stub with apps/cmd_NAME.cpp.
+// Subcommands whose cmd_NAME.cpp does not exist yet (apps/CMakeLists.txt defines HF_STUB_NAME for them).
 #include <CLI/CLI.hpp>
 
 #include "apps/commands.h"
 
 namespace hf::apps {
+#ifdef HF_STUB_generate
 void add_generate_command(CLI::App& app) { app.add_subcommand("generate", "(not yet built)"); }
+#endif
+#ifdef HF_STUB_eval
 void add_eval_command(CLI::App& app) { app.add_subcommand("eval", "(not yet built)"); }
+#endif
+#ifdef HF_STUB_run
 void add_run_command(CLI::App& app) { app.add_subcommand("run", "(not yet built)"); }
+#endif
 }  // namespace hf::apps
