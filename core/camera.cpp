@@ -1,5 +1,6 @@
 #include "core/camera.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -80,9 +81,13 @@ PinholeCamera PinholeCamera::parse(const std::string& text, const std::string& f
       const size_t byte = std::min<size_t>(e.byte, text.size());
       const int line = 1 + int(std::count(text.begin(), text.begin() + long(byte), '\n'));
       throw ParseError(file, line, "expected a JSON camera object");
+    }  catch (const nlohmann::json::exception& e) {
+      // e.g. a number too large for a double (1e400): out_of_range, not parse_error.
+      throw ParseError(file, 0, std::string("expected a JSON camera object (") + e.what() + ")");
     }
     auto num = [&](const char* key) -> double {
-      if (!j.contains(key) || !j[key].is_number()) throw ParseError(file, 0, std::string("expected a number '") + key + "'");
+      if (!j.is_object() || !j.contains(key) || !j[key].is_number())
+        throw ParseError(file, 0, std::string("expected a number '") + key + "'");
       return j[key].get<double>();
     };
     c.fx = num("fx");
@@ -90,7 +95,8 @@ PinholeCamera PinholeCamera::parse(const std::string& text, const std::string& f
     c.cx = num("cx");
     c.cy = num("cy");
     const double w = num("width"), h = num("height");
-    if (!(w >= 1 && w <= 16384 && h >= 1 && h <= 16384)) throw ParseError(file, 0, "expected width and height in 1..16384");
+    if (!(w >= 1 && w <= 16384 && h >= 1 && h <= 16384) || w != std::floor(w) || h != std::floor(h))
+      throw ParseError(file, 0, "expected integer width and height in 1..16384");
     c.width = int(w);
     c.height = int(h);
   } else {
@@ -121,8 +127,9 @@ PinholeCamera PinholeCamera::parse(const std::string& text, const std::string& f
     c.fy = values["fy"];
     c.cx = values["cx"];
     c.cy = values["cy"];
-    if (!(values["width"] >= 1 && values["width"] <= 16384 && values["height"] >= 1 && values["height"] <= 16384))
-      throw ParseError(file, 0, "expected width and height in 1..16384");
+    const double w = values["width"], h = values["height"];
+    if (!(w >= 1 && w <= 16384 && h >= 1 && h <= 16384) || w != std::floor(w) || h != std::floor(h))
+      throw ParseError(file, 0, "expected integer width and height in 1..16384");
     c.width = int(values["width"]);
     c.height = int(values["height"]);
   }

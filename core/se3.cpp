@@ -19,7 +19,10 @@ Eigen::Matrix3d so3_left_jacobian(const Eigen::Vector3d& w) {
     a = 0.5 - theta2 / 24.0;
     b = 1.0 / 6.0 - theta2 / 120.0;
   } else {
-    a = (1.0 - std::cos(theta)) / theta2;
+    // 1 - cos t = 2 sin^2(t/2): the direct form cancels catastrophically for small t (relative error eps / t^2,
+    // 1e-6 just above kSmallAngle).
+    const double s = std::sin(0.5 * theta);
+    a = 2.0 * s * s / theta2;
     b = (theta - std::sin(theta)) / (theta2 * theta);
   }
   return Eigen::Matrix3d::Identity() + a * W + b * W * W;
@@ -34,7 +37,11 @@ Eigen::Matrix3d so3_left_jacobian_inverse(const Eigen::Vector3d& w) {
   if (theta < kSmallAngle) {
     c = 1.0 / 12.0 + theta2 / 720.0;
   } else {
-    c = (1.0 - theta * std::sin(theta) / (2.0 * (1.0 - std::cos(theta)))) / theta2;
+    // t sin t / (2 (1 - cos t)) = (t/2) cot(t/2). Written with 1 - cos t, the ratio inherits that difference's
+    // relative error eps / t^2, which the subtraction from 1 and the division by t^2 turn into an error of
+    // eps / t^4 in c (log's translation was off by ~1e-6 |t| just above kSmallAngle).
+    const double half = 0.5 * theta;
+    c = (1.0 - half * std::cos(half) / std::sin(half)) / theta2;
   }
   return Eigen::Matrix3d::Identity() - 0.5 * W + c * W * W;
 }

@@ -1,6 +1,8 @@
 #include "io/trajectory_io.h"
 
+#include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -9,6 +11,23 @@
 #include "core/error.h"
 
 namespace hf {
+namespace {
+
+// The shortest fixed-point text that parses back to exactly this double: TUM's own stamps keep their six
+// decimals ("1305031229.528748"), synthetic ones (k / 30 s) lose nothing, and stamps closer than a microsecond
+// stay distinct (a fixed six-decimal format would merge them and break the strictly-increasing rule on reading).
+std::string format_timestamp(double t) {
+  char buffer[400];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), t, std::chars_format::fixed);
+  if (result.ec != std::errc()) {
+    std::ostringstream s;
+    s << std::setprecision(17) << t;
+    return s.str();
+  }
+  return std::string(buffer, result.ptr);
+}
+
+}  // namespace
 
 Trajectory parse_tum_trajectory(const std::string& text, const std::string& file) {
   Trajectory out;
@@ -32,8 +51,12 @@ Trajectory parse_tum_trajectory(const std::string& text, const std::string& file
       ++n;
     }
     if (n != 8) throw ParseError(file, lineno, "expected 8 numbers 'timestamp tx ty tz qx qy qz qw', got " + std::to_string(n));
-    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
-    if (q.norm() < 1e-6) throw ParseError(file, lineno, "expected a non-zero quaternion");
+    // Scale by the largest component before normalising: q.norm() overflows to inf for components near 1e155
+    // (normalising by it would then give a zero quaternion, i.e. NaN rotations) and underflows for tiny ones.
+    Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+    const double largest = q.coeffs().cwiseAbs().maxCoeff();
+    if (!(largest * (q.coeffs() / largest).norm() >= 1e-6)) throw ParseError(file, lineno, "expected a non-zero quaternion");
+    q.coeffs() /= largest;
     if (!out.empty() && !(v[0] > out.back().timestamp_s))
       throw ParseError(file, lineno, "expected timestamps strictly increasing");
     out.push_back({v[0], SE3(q, Eigen::Vector3d(v[1], v[2], v[3]))});
@@ -60,7 +83,7 @@ std::string format_tum_trajectory(const Trajectory& trajectory, const std::strin
   for (const StampedPose& p : trajectory) {
     const auto& t = p.T_world_camera.translation();
     const auto& q = p.T_world_camera.quaternion();
-    out << std::fixed << std::setprecision(6) << p.timestamp_s << std::defaultfloat << std::setprecision(17) << ' '
+    out << format_timestamp(p.timestamp_s) << ' '
         << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w()
         << "\n";
   }

@@ -7,7 +7,7 @@
 #ifndef HF_CORE_KERNELS_CL_COMPAT_H
 #define HF_CORE_KERNELS_CL_COMPAT_H
 
-#ifdef __OPENCL_VERSION__
+#if defined(__OPENCL_VERSION__) || defined(__OPENCL_C_VERSION__)
 #define HF_GLOBAL __global
 #define HF_CONSTANT __constant
 #define HF_INLINE inline

@@ -1,0 +1,64 @@
+// FrameSource: the one interface through which the pipeline receives RGB-D frames, whatever the dataset format.
+//
+// A source yields its frames in time order through next(), which returns
+//   ok        a decoded frame (depth in metres, RGB colour, optional ground-truth pose),
+//   bad_frame a frame that could not be used (missing/truncated image, wrong size, ...): the caller skips it and
+//             prints `message`, a single line naming the file and the problem; reading continues with the next one,
+//   end       no more frames (and every later call returns end again).
+// Problems with the dataset as a whole (missing folder, malformed list file) are reported earlier, by the
+// constructor / open_dataset, as hf::Error or hf::ParseError. next() throws only for resource failures
+// (std::bad_alloc) that no frame-level skipping can fix.
+//
+// Thread-safety: next() is called by one thread at a time. The const accessors return data fixed at
+// construction, so they may be called from any thread, also while next() runs (PrefetchingSource relies on it).
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+
+#include "core/camera.h"
+#include "core/image.h"
+#include "core/se3.h"
+#include "io/trajectory_io.h"
+
+namespace hf {
+
+struct RgbdFrame {
+  size_t index = 0;          // 0-based position in the source, bad frames included (frame k is the k-th next())
+  double timestamp_s = 0.0;  // the colour image's time stamp (TUM) or index / frame rate (7-Scenes)
+  DepthImage depth;          // metres, 0 = no measurement; same size as `color` and as the source's camera
+  ColorImage color;          // RGB
+  std::optional<SE3> T_world_camera_gt;  // ground truth where the dataset has one near timestamp_s
+  std::string depth_file, color_file;    // full paths, for messages
+};
+
+enum class FrameStatus { ok, bad_frame, end };
+
+struct FrameRead {
+  FrameStatus status = FrameStatus::end;
+  // ok: every field. bad_frame: index, timestamp_s, file names and ground truth (images empty). end: nothing.
+  RgbdFrame frame;
+  std::string message;  // bad_frame: "FILE: what is wrong" (one line); empty otherwise
+};
+
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+
+  virtual FrameRead next() = 0;
+
+  // The camera all frames are checked against (depth and colour are registered: one camera for both).
+  virtual const PinholeCamera& camera() const = 0;
+  // Where camera() came from, for reports: e.g. "preset fr1 (folder name 'rgbd_dataset_freiburg1_desk')".
+  virtual const std::string& camera_origin() const = 0;
+  // Number of frames next() will yield before end (ok and bad ones), known without decoding any image.
+  virtual size_t size() const = 0;
+  // Short human-readable name: format and folder, e.g. "TUM RGB-D 'data/rgbd_dataset_freiburg1_desk'".
+  virtual const std::string& name() const = 0;
+  // The dataset's own ground-truth trajectory (T_world_camera with time stamps; empty when it has none), for
+  // evaluating estimated trajectories against.
+  virtual const Trajectory& ground_truth() const = 0;
+};
+
+}  // namespace hf

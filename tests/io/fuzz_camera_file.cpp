@@ -1,0 +1,23 @@
+// Fuzzes hf::PinholeCamera::parse (camera.json / camera.txt): a parsed camera is always valid (finite, positive
+// focal lengths and size within the documented limits); every failure is an hf::ParseError.
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <string>
+
+#include "core/camera.h"
+#include "core/error.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  try {
+    const hf::PinholeCamera c = hf::PinholeCamera::parse(text, "camera.json");
+    if (!(c.fx > 0.0) || !(c.fy > 0.0) || !std::isfinite(c.fx) || !std::isfinite(c.fy) || !std::isfinite(c.cx) ||
+        !std::isfinite(c.cy) || c.width < 1 || c.height < 1 || c.width > 16384 || c.height > 16384)
+      std::abort();
+  } catch (const hf::ParseError& e) {
+    if (e.file() != "camera.json") std::abort();
+  }
+  return 0;
+}

@@ -1,0 +1,108 @@
+// io/trajectory_io: TUM trajectory text, both directions.
+#include "io/trajectory_io.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/error.h"
+#include "tests/io/test_dataset_util.h"
+
+using hf::test::contains;
+using hf::test::error_of;
+
+TEST(TrajectoryIo, ParsesCommentsWhitespaceAndQuaternionOrder) {
+  const std::string text =
+      "# ground truth trajectory\n"
+      "# timestamp tx ty tz qx qy qz qw\n"
+      "\n"
+      "1305031225.9334 1.3357 0.6698 1.6180 0 0 0.70710678118654752 0.70710678118654752\r\n"
+      "  1305031225.9434\t1 2 3\t0 0 0 2  \n";  // not normalised: scaled to unit length
+  const hf::Trajectory t = hf::parse_tum_trajectory(text, "gt.txt");
+  ASSERT_EQ(t.size(), 2u);
+  EXPECT_DOUBLE_EQ(t[0].timestamp_s, 1305031225.9334);
+  EXPECT_NEAR((t[0].T_world_camera.translation() - Eigen::Vector3d(1.3357, 0.6698, 1.6180)).norm(), 0.0, 1e-15);
+  // qz = qw = sqrt(1/2) is 90 degrees about z: x maps to y.
+  const Eigen::Vector3d x_rotated = t[0].T_world_camera.rotation() * Eigen::Vector3d::UnitX();
+  EXPECT_NEAR((x_rotated - Eigen::Vector3d::UnitY()).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(t[1].T_world_camera.quaternion().w(), 1.0, 1e-15);
+  EXPECT_TRUE(hf::parse_tum_trajectory("", "empty").empty());
+}
+
+TEST(TrajectoryIo, MalformedLinesNameFileAndLine) {
+  struct Case {
+    std::string text;
+    int line;
+    std::string expect;
+  };
+  const Case cases[] = {
+      {"1 0 0 0 0 0 0 1\n2 0 0 0 0 0 1\n", 2, "expected 8 numbers"},
+      {"1 0 0 0 0 0 0 1 9\n", 1, "got more"},
+      {"# c\n1 0 0 zero 0 0 0 1\n", 2, "finite number"},
+      {"1 0 0 nan 0 0 0 1\n", 1, "finite number"},
+      {"1 0 0 0 0 0 0 inf\n", 1, "finite number"},
+      {"1 0 0 0 0 0 0 0\n", 1, "non-zero quaternion"},
+      {"1 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", 2, "strictly increasing"},
+      {"2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", 2, "strictly increasing"},
+  };
+  for (const Case& c : cases) {
+    const std::string msg = error_of([&] { hf::parse_tum_trajectory(c.text, "dir/gt.txt"); });
+    EXPECT_TRUE(contains(msg, "dir/gt.txt:" + std::to_string(c.line) + ": ")) << c.text << " -> " << msg;
+    EXPECT_TRUE(contains(msg, c.expect)) << msg;
+  }
+}
+
+TEST(TrajectoryIo, ExtremeQuaternionsGiveUnitRotationsOrAnError) {
+  // Components whose squares overflow double still describe a rotation (here 90 degrees about x); the norm
+  // must not overflow into a zero, NaN-producing quaternion.
+  const hf::Trajectory t = hf::parse_tum_trajectory("1 0 0 0 1e200 0 0 1e200\n", "q.txt");
+  ASSERT_EQ(t.size(), 1u);
+  EXPECT_TRUE(t[0].T_world_camera.is_finite());
+  EXPECT_NEAR(t[0].T_world_camera.quaternion().norm(), 1.0, 1e-12);
+  EXPECT_NEAR(t[0].T_world_camera.angle_rad(), M_PI / 2, 1e-12);
+  // A quaternion of norm below 1e-6 is refused as zero, whatever its direction.
+  EXPECT_TRUE(contains(error_of([] { hf::parse_tum_trajectory("1 0 0 0 0 0 1e-200 1e-200\n", "q.txt"); }),
+                       "q.txt:1: expected a non-zero quaternion"));
+}
+
+TEST(TrajectoryIo, FormatParseRoundTripIsExact) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(0.0, 1.0);
+  hf::Trajectory t;
+  double stamp = 1305031229.528748;
+  for (int i = 0; i < 50; ++i) {
+    hf::Vector6d xi;
+    for (int k = 0; k < 6; ++k) xi[k] = n(rng);
+    t.push_back({stamp, hf::SE3::exp(xi)});
+    stamp += 1.0 / 30.0;  // stamps that are not whole microseconds
+  }
+  t.push_back({stamp + 1e-7, hf::SE3()});  // closer than a microsecond to the previous one
+  const std::string text = hf::format_tum_trajectory(t, "estimated by hashfusion\nsecond line");
+  EXPECT_EQ(text.rfind("# estimated by hashfusion\n# second line\n", 0), 0u) << text.substr(0, 80);
+  const hf::Trajectory back = hf::parse_tum_trajectory(text, "round-trip");
+  ASSERT_EQ(back.size(), t.size());
+  for (size_t i = 0; i < t.size(); ++i) {
+    EXPECT_EQ(back[i].timestamp_s, t[i].timestamp_s) << i;
+    EXPECT_EQ(back[i].T_world_camera.translation(), t[i].T_world_camera.translation()) << i;
+    EXPECT_NEAR((back[i].T_world_camera.matrix() - t[i].T_world_camera.matrix()).cwiseAbs().maxCoeff(), 0.0, 1e-15);
+  }
+  // TUM's own stamps keep their familiar six decimals.
+  EXPECT_TRUE(contains(text, "\n1305031229.528748 ")) << text.substr(0, 200);
+}
+
+TEST(TrajectoryIo, WriteIsAtomicAndReadNamesMissingFiles) {
+  hf::test::TempDir dir("traj");
+  const std::string path = dir / "est.txt";
+  const hf::Trajectory t = {{1.0, hf::SE3()}, {2.0, hf::SE3(Eigen::Quaterniond::Identity(), {1, 2, 3})}};
+  hf::write_tum_trajectory(path, t);
+  const hf::Trajectory back = hf::read_tum_trajectory(path);
+  ASSERT_EQ(back.size(), 2u);
+  EXPECT_EQ(back[1].T_world_camera.translation(), Eigen::Vector3d(1, 2, 3));
+  size_t files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path)) files += e.is_regular_file();
+  EXPECT_EQ(files, 1u);
+  const std::string missing = dir / "missing.txt";
+  EXPECT_TRUE(contains(error_of([&] { hf::read_tum_trajectory(missing); }), missing));
+  EXPECT_FALSE(error_of([&] { hf::write_tum_trajectory(dir / "no/such/dir.txt", t); }).empty());
+}
