@@ -13,6 +13,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <ostream>
 #include <sstream>
 #include <vector>
 
@@ -75,7 +76,8 @@ bool has_field(const pcl::PCLPointCloud2& blob, const char* name) {
 
 // PCL's reader trusts the header (a file of plain text makes it crash), so the header is checked here first: the
 // fields PCL needs, consistent per-field lists, point counts that fit the bytes present.
-void check_header(const std::string& path) {
+// Returns the number of points the header declares.
+std::uint64_t check_header(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open PCD file");
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -152,12 +154,20 @@ void check_header(const std::string& path) {
                                                    std::to_string(left) + " bytes of data (truncated file?)");
   if (data == "binary_compressed" && left < 8)
     throw ParseError(path, lineno, "expected the compressed and uncompressed sizes after DATA binary_compressed");
+  return points;
 }
 
 }  // namespace
 
 void write_pcd(const std::string& path, const PointCloud& cloud) {
   cloud.validate();
+  if (cloud.size() == 0) {  // PCL's writer and reader index element 0 of empty clouds (UBSan), so not through PCL
+    write_file_atomically(path, [](std::ostream& out) {
+      out << "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
+             "COUNT 1 1 1\nWIDTH 0\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 0\nDATA binary\n";
+    });
+    return;
+  }
   write_path_atomically(path, [&](const std::string& tmp) {
     try {
       if (cloud.has_normals() && cloud.has_colors()) save<pcl::PointXYZRGBNormal>(tmp, cloud);
@@ -173,7 +183,7 @@ void write_pcd(const std::string& path, const PointCloud& cloud) {
 }
 
 PointCloud read_pcd(const std::string& path) {
-  check_header(path);
+  if (check_header(path) == 0) return PointCloud{};  // see write_pcd: PCL mishandles empty clouds
   pcl::PCLPointCloud2 blob;
   int rc = -1;
   try {

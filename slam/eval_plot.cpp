@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -136,9 +139,33 @@ ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, c
   }
 
   const int W = options.width_px, H = options.height_px;
-  const double font = std::clamp(H / 1500.0, 0.42, 1.2);
+  const double font = std::clamp(std::min(H / 1500.0, W / 1950.0), 0.35, 1.2);
+
+  const std::string title_line = options.title.empty() ? "ground truth vs aligned estimate" : options.title;
+  double title_font = font * 1.25;
+  while (title_font > 0.3 && text_size(title_line, title_font, 2).width > W - 8) title_font *= 0.9;
+  std::vector<std::string> metric_lines;
+  {
+    const TrajectoryMetrics m = result.metrics();
+    char ate[128], rpe[128];
+    std::snprintf(ate, sizeof ate, "ATE RMSE %.4f m over %zu pairs (max %.4f m)", m.ate_m.rmse, m.pairs, m.ate_m.max);
+    metric_lines.push_back(ate);
+    if (m.rpe_trans_m_per_s) {
+      std::snprintf(rpe, sizeof rpe, "RPE RMSE %.4f m/s, %.3f deg/s over %zu pairs", m.rpe_trans_m_per_s->rmse,
+                    m.rpe_rot_deg_per_s->rmse, m.rpe_pairs);
+      const std::string joined = metric_lines[0] + "    " + rpe;
+      if (text_size(joined, font).width <= W - 8) {
+        metric_lines[0] = joined;
+      } else {
+        metric_lines.push_back(rpe);
+      }
+    }
+  }
+  const int title_height = int(8 * font / 0.55) + text_size(title_line, title_font, 2).height +
+                           int(metric_lines.size()) * (text_size("Ag", font).height + int(12 * font / 0.55));
+
   const int margin_left = int(110 * font / 0.55), margin_bottom = int(70 * font / 0.55),
-            margin_top = int(80 * font / 0.55), margin_right = int(150 * font / 0.55);
+            margin_top = title_height + int(20 * font / 0.55), margin_right = int(150 * font / 0.55);
   const cv::Rect area(margin_left, margin_top, W - margin_left - margin_right, H - margin_top - margin_bottom);
   // Equal aspect: one metres-per-pixel for both axes, the data centred in the plot area.
   const double m_per_px = std::max((hi0 - lo0) / area.width, (hi1 - lo1) / area.height);
@@ -194,6 +221,10 @@ ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, c
   const cv::Point offset(area.x * int(kSub), area.y * int(kSub));
   auto local = [&](const Eigen::Vector3d& p) { return to_px(p) - offset; };
   const int line_w = std::max(1, int(std::lround(2 * font / 0.55)));
+
+  std::vector<cv::Point> data_px;  // whole-pixel image positions of everything drawn, for placing the legend
+  for (const auto& p : gt_points) data_px.push_back(to_px(p) / int(kSub));
+  for (const StampedPose& pose : aligned) data_px.push_back(to_px(pose.T_world_camera.translation()) / int(kSub));
 
   const ColourMap cmap;
   const double max_error = result.ate.error_m.max;
@@ -251,26 +282,20 @@ ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, c
     text(img, heading, {bar_x + bar_w / 2 - s.width / 2, bar_y - int(12 * font / 0.55)}, font, kBlack);
   }
 
-  // Title.
+  // Title: the caller's line (bold, shrunk to fit) and the metrics, split over two lines when too wide.
   {
-    const std::string line1 = options.title.empty() ? "ground truth vs aligned estimate" : options.title;
-    char line2[256];
-    const TrajectoryMetrics m = result.metrics();
-    if (m.rpe_trans_m_per_s) {
-      std::snprintf(line2, sizeof line2, "ATE RMSE %.4f m over %zu pairs (max %.4f m)   RPE RMSE %.4f m/s, %.3f deg/s",
-                    m.ate_m.rmse, m.pairs, m.ate_m.max, m.rpe_trans_m_per_s->rmse, m.rpe_rot_deg_per_s->rmse);
-    } else {
-      std::snprintf(line2, sizeof line2, "ATE RMSE %.4f m over %zu pairs (max %.4f m)", m.ate_m.rmse, m.pairs,
-                    m.ate_m.max);
+    const int y0 = int(8 * font / 0.55);
+    const cv::Size s1 = text_size(title_line, title_font, 2);
+    int y = y0 + s1.height;
+    text(img, title_line, {std::max(4, W / 2 - s1.width / 2), y}, title_font, kBlack, 2);
+    for (const std::string& line : metric_lines) {
+      const cv::Size s2 = text_size(line, font);
+      y += s2.height + int(12 * font / 0.55);
+      text(img, line, {std::max(4, W / 2 - s2.width / 2), y}, font, kBlack);
     }
-    const double f1 = font * 1.25;
-    const cv::Size s1 = text_size(line1, f1, 2), s2 = text_size(line2, font);
-    const int y1 = int(28 * font / 0.55);
-    text(img, line1, {W / 2 - s1.width / 2, y1}, f1, kBlack, 2);
-    text(img, line2, {W / 2 - s2.width / 2, y1 + s1.height + int(14 * font / 0.55)}, font, kBlack);
   }
 
-  // Legend, upper left inside the plot; the "without ground truth" entry only when such poses exist.
+  // Legend in the corner of the plot that hides the fewest drawn points; the "without ground truth" entry only when such poses exist.
   {
     enum Kind { kGroundTruth, kEstimate, kUnmatchedPose, kDifference, kStart };
     std::vector<std::pair<Kind, std::string>> entries = {{kGroundTruth, "ground truth"},
@@ -283,8 +308,20 @@ ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, c
     for (const auto& e : entries) width = std::max(width, text_size(e.second, font).width);
     const int rows = int(entries.size());
     const int row = ts.height + int(12 * font / 0.55), sample = int(36 * font / 0.55), pad_px = 8;
-    const cv::Rect box = cv::Rect(area.x + 10, area.y + 10, pad_px * 3 + sample + width, pad_px * 2 + row * rows - 6) &
-                         cv::Rect(0, 0, W, H);
+    const cv::Size box_size(pad_px * 3 + sample + width, pad_px * 2 + row * rows - 6);
+    cv::Rect box;
+    size_t fewest = SIZE_MAX;
+    for (int corner = 0; corner < 4; ++corner) {  // upper left, upper right, lower left, lower right
+      const int x = corner % 2 == 0 ? area.x + 10 : area.x + area.width - 10 - box_size.width;
+      const int y = corner < 2 ? area.y + 10 : area.y + area.height - 10 - box_size.height;
+      const cv::Rect candidate = cv::Rect(cv::Point(x, y), box_size) & cv::Rect(0, 0, W, H);
+      size_t covered = 0;
+      for (const cv::Point& p : data_px) covered += candidate.contains(p) ? 1 : 0;
+      if (covered < fewest) {
+        fewest = covered;
+        box = candidate;
+      }
+    }
     cv::Mat roi = img(box);
     cv::Mat overlay(roi.size(), roi.type(), kWhite);
     cv::addWeighted(overlay, 0.85, roi, 0.15, 0.0, roi);

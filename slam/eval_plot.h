@@ -14,7 +14,7 @@
 //   maximum error yellow), with a colour bar labelled in metres; thin grey lines join each associated estimate
 //   pose to its ground-truth pose (the "difference" lines of evaluate_ate.py).
 // - Title: the caller's title (e.g. the file names) and "ATE RMSE ... m over N pairs" (+ RPE when present);
-//   a legend in the upper left corner.
+//   a legend in the corner of the plot that hides the fewest drawn poses.
 // Thread-safety: pure functions. Failures: hf::Error (see each function).
 #pragma once
 
