@@ -69,8 +69,8 @@ void run_eval(const EvalArgs& args) {
     }
     std::cout << "# per pair RPE: est_stamp_0 est_stamp_1 gt_stamp_0 gt_stamp_1 trans_m_per_s rot_deg_per_s\n";
     for (const RpePair& p : result.rpe.pairs) {
-      std::cout << p.est_stamp_0_s << ' ' << p.est_stamp_1_s << ' ' << p.gt_stamp_0_s << ' ' << p.gt_stamp_1_s
-                << ' ' << p.trans_m_per_s << ' ' << p.rot_deg_per_s << "\n";
+      std::cout << p.est_stamp_0_s << ' ' << p.est_stamp_1_s << ' ' << p.gt_stamp_0_s << ' ' << p.gt_stamp_1_s << ' '
+                << p.trans_m_per_s << ' ' << p.rot_deg_per_s << "\n";
     }
     std::cout.unsetf(std::ios::floatfield);
   }

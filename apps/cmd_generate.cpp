@@ -1,12 +1,14 @@
 // `hashfusion generate`: writes a synthetic RGB-D sequence with exact ground truth as a TUM RGB-D folder.
 #include <CLI/CLI.hpp>
 #include <cstdint>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
 
 #include "apps/commands.h"
 #include "core/camera.h"
+#include "core/error.h"
 #include "datasets/presets.h"
 #include "datasets/synthetic_sequence.h"
 #include "datasets/tum_writer.h"
@@ -25,12 +27,24 @@ struct GenerateArgs {
   bool force = false;
 };
 
+// A camera preset name, else a camera file (PinholeCamera::load: JSON or "key value" text).
+PinholeCamera camera_from_argument(const std::string& camera) {
+  for (const auto& name : PinholeCamera::preset_names())
+    if (name == camera) return PinholeCamera::preset(name);
+  if (!std::filesystem::exists(camera)) {
+    std::string known;
+    for (const auto& n : PinholeCamera::preset_names()) known += (known.empty() ? "" : ", ") + n;
+    throw Error("--camera '" + camera + "': neither a camera preset (" + known + ") nor an existing camera file");
+  }
+  return PinholeCamera::load(camera);
+}
+
 void run_generate(const GenerateArgs& a) {
   datasets::SyntheticOptions options;
   options.preset = a.preset;
   options.frames = a.frames;
   options.seed = a.seed;
-  options.camera = PinholeCamera::preset(a.camera);
+  options.camera = camera_from_argument(a.camera);
   options.noise_enabled = !a.no_noise;
   const datasets::SyntheticSequence sequence(options);  // validates preset and frame count
   datasets::TumWriteOptions write;
@@ -53,7 +67,7 @@ void add_generate_command(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "Sensor-noise seed; the same seed gives identical files")
       ->capture_default_str();
   cmd->add_option("--out", args->out, "Output folder (must not exist unless --force)")->required();
-  cmd->add_option("--camera", args->camera, "Camera preset (resolution and intrinsics)")->capture_default_str();
+  cmd->add_option("--camera", args->camera, "Camera preset name or camera file (resolution and intrinsics)")->capture_default_str();
   cmd->add_flag("--no-noise", args->no_noise, "Exact depth and colour: no sensor model");
   cmd->add_flag("--force", args->force, "Replace an existing output folder");
   cmd->callback([args] { run_generate(*args); });

@@ -115,7 +115,7 @@ void run(const RunOptions& o) {
   report["camera"] = source->camera().describe();
   report["camera_origin"] = source->camera_origin();
   const double total_ms = times.total_ms("read") + times.total_ms("track");
-  report["fps"] = total_ms > 0 ? 1000.0 * double(frames) / total_ms : nullptr;
+  report["fps"] = total_ms > 0 ? nlohmann::json(1000.0 * double(frames) / total_ms) : nlohmann::json(nullptr);
   report["ms_per_frame"] = {{"read", times.mean_ms("read")}, {"track", times.mean_ms("track")},
                             {"total", frames ? total_ms / double(frames) : 0.0}};
   std::vector<std::string> outputs = {traj_path};

@@ -1,13 +1,12 @@
 #include "slam/eval.h"
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
-
-#include <Eigen/SVD>
-#include <nlohmann/json.hpp>
 
 #include "core/error.h"
 #include "io/associate.h"
@@ -130,9 +129,8 @@ AteResult evaluate_ate(const Trajectory& gt, const Trajectory& est, const AteOpt
   if (gt.empty()) throw Error("ATE: the ground-truth trajectory has no poses");
   if (est.empty()) throw Error("ATE: the estimated trajectory has no poses");
 
-  const std::vector<Match> matches =
-      associate(stamps_of(gt), stamps_of(est), {.max_difference_s = options.max_difference_s,
-                                                .offset_s = options.offset_s});
+  const std::vector<Match> matches = associate(
+      stamps_of(gt), stamps_of(est), {.max_difference_s = options.max_difference_s, .offset_s = options.offset_s});
   const std::string window = shortest(options.max_difference_s) + " s" +
                              (options.offset_s != 0.0 ? " (offset " + shortest(options.offset_s) + " s)" : "");
   if (matches.empty()) {
@@ -220,8 +218,7 @@ RpeResult evaluate_rpe(const Trajectory& gt, const Trajectory& est, const RpeOpt
                  .gt_stamp_0_s = stamps_gt[g0],
                  .gt_stamp_1_s = stamps_gt[g1],
                  .trans_m_per_s = error.translation().norm() / options.delta_s,
-                 .rot_deg_per_s = rotation_angle_rad(error.quaternion()) * 180.0 / std::numbers::pi /
-                                  options.delta_s};
+                 .rot_deg_per_s = rotation_angle_rad(error.quaternion()) * 180.0 / std::numbers::pi / options.delta_s};
     trans.push_back(pair.trans_m_per_s);
     rot.push_back(pair.rot_deg_per_s);
     result.pairs.push_back(pair);
@@ -255,12 +252,9 @@ namespace {
 
 void put_stats(nlohmann::json& j, const std::string& prefix, const std::string& unit,
                const std::optional<ErrorStats>& stats) {
-  const std::pair<const char*, double ErrorStats::*> fields[] = {{"rmse", &ErrorStats::rmse},
-                                                                 {"mean", &ErrorStats::mean},
-                                                                 {"median", &ErrorStats::median},
-                                                                 {"std", &ErrorStats::std},
-                                                                 {"min", &ErrorStats::min},
-                                                                 {"max", &ErrorStats::max}};
+  const std::pair<const char*, double ErrorStats::*> fields[] = {
+      {"rmse", &ErrorStats::rmse}, {"mean", &ErrorStats::mean}, {"median", &ErrorStats::median},
+      {"std", &ErrorStats::std},   {"min", &ErrorStats::min},   {"max", &ErrorStats::max}};
   for (const auto& [name, member] : fields) {
     const std::string key = prefix + "_" + name + "_" + unit;
     if (stats && std::isfinite((*stats).*member)) {
@@ -316,8 +310,8 @@ nlohmann::json per_frame_to_json(const EvalResult& result) {
 std::string format_metrics_table(const TrajectoryMetrics& m) {
   std::ostringstream out;
   char line[160];
-  std::snprintf(line, sizeof line, "%-10s %-6s %6s %10s %10s %10s %10s %10s %10s\n", "metric", "unit", "pairs",
-                "rmse", "mean", "median", "std", "min", "max");
+  std::snprintf(line, sizeof line, "%-10s %-6s %6s %10s %10s %10s %10s %10s %10s\n", "metric", "unit", "pairs", "rmse",
+                "mean", "median", "std", "min", "max");
   out << line;
   for (const Row& row : rows_of(m)) {
     if (!row.stats) {
@@ -325,8 +319,8 @@ std::string format_metrics_table(const TrajectoryMetrics& m) {
                     row.unit.c_str(), row.count, "-", m.rpe_delta_s);
     } else {
       const ErrorStats& s = *row.stats;
-      std::snprintf(line, sizeof line, "%-10s %-6s %6zu %10.6f %10.6f %10.6f %10.6f %10.6f %10.6f\n",
-                    row.name.c_str(), row.unit.c_str(), row.count, s.rmse, s.mean, s.median, s.std, s.min, s.max);
+      std::snprintf(line, sizeof line, "%-10s %-6s %6zu %10.6f %10.6f %10.6f %10.6f %10.6f %10.6f\n", row.name.c_str(),
+                    row.unit.c_str(), row.count, s.rmse, s.mean, s.median, s.std, s.min, s.max);
     }
     out << line;
   }

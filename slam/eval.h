@@ -48,13 +48,12 @@
 // is wrong (no pairs, too few pairs, empty trajectory, bad options); nothing prints.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstddef>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <nlohmann/json_fwd.hpp>
 
 #include "core/se3.h"
 #include "io/trajectory_io.h"
@@ -114,13 +113,13 @@ struct RpeOptions {
 struct RpePair {
   size_t est_index_0 = 0, est_index_1 = 0, gt_index_0 = 0, gt_index_1 = 0;
   double est_stamp_0_s = 0.0, est_stamp_1_s = 0.0, gt_stamp_0_s = 0.0, gt_stamp_1_s = 0.0;
-  double trans_m_per_s = 0.0;   // |t(error)| / delta_s
-  double rot_deg_per_s = 0.0;   // angle(error) in degrees / delta_s
+  double trans_m_per_s = 0.0;  // |t(error)| / delta_s
+  double rot_deg_per_s = 0.0;  // angle(error) in degrees / delta_s
 };
 
 struct RpeResult {
-  std::vector<RpePair> pairs;  // in order of est_index_0
-  size_t rejected_gap_pairs = 0;  // pairs dropped because the nearest ground truth was too far away
+  std::vector<RpePair> pairs;             // in order of est_index_0
+  size_t rejected_gap_pairs = 0;          // pairs dropped because the nearest ground truth was too far away
   double gt_max_time_difference_s = 0.0;  // 2 x median ground-truth interval (0 when gt has < 2 poses)
   double delta_s = 1.0;                   // the options' delta
   ErrorStats trans_m_per_s, rot_deg_per_s;

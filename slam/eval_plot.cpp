@@ -4,12 +4,11 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <string>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -17,8 +16,8 @@
 namespace hf {
 namespace {
 
-const cv::Scalar kWhite(255, 255, 255), kBlack(0, 0, 0), kGrid(232, 232, 232), kAxis(90, 90, 90),
-    kLink(175, 175, 245), kUnmatched(150, 150, 150);  // BGR: light red difference lines, grey
+const cv::Scalar kWhite(255, 255, 255), kBlack(0, 0, 0), kGrid(232, 232, 232), kAxis(90, 90, 90), kLink(175, 175, 245),
+    kUnmatched(150, 150, 150);  // BGR: light red difference lines, grey
 constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
 constexpr int kShift = 4;  // sub-pixel bits for cv::line / cv::circle
 constexpr double kSub = 1 << kShift;
@@ -237,10 +236,11 @@ ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, c
              local(aligned[p.est_index].T_world_camera.translation()), kLink, 1);
   }
   for (size_t k = 1; k < aligned.size(); ++k) {
-    polyline(plot, local(aligned[k - 1].T_world_camera.translation()),
-             local(aligned[k].T_world_camera.translation()), kUnmatched, 1);
+    polyline(plot, local(aligned[k - 1].T_world_camera.translation()), local(aligned[k].T_world_camera.translation()),
+             kUnmatched, 1);
   }
-  for (size_t k = 1; k < gt_points.size(); ++k) polyline(plot, local(gt_points[k - 1]), local(gt_points[k]), kBlack, line_w);
+  for (size_t k = 1; k < gt_points.size(); ++k)
+    polyline(plot, local(gt_points[k - 1]), local(gt_points[k]), kBlack, line_w);
   for (size_t k = 0; k < pairs.size(); ++k) {
     const cv::Point a = local(aligned[pairs[k].est_index].T_world_camera.translation());
     if (k + 1 < pairs.size()) {
@@ -253,7 +253,8 @@ ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, c
                colour_of(p.error_m), cv::FILLED, cv::LINE_AA, kShift);
   }
   // Start markers: squares on the first associated ground-truth and estimate poses.
-  for (const Eigen::Vector3d& start : {gt_points.front(), aligned[pairs.front().est_index].T_world_camera.translation()}) {
+  for (const Eigen::Vector3d& start :
+       {gt_points.front(), aligned[pairs.front().est_index].T_world_camera.translation()}) {
     const cv::Point s = local(start);
     const int r = int(5 * kSub);
     cv::rectangle(plot, s - cv::Point(r, r), s + cv::Point(r, r), kBlack, 2, cv::LINE_AA, kShift);
@@ -295,7 +296,8 @@ ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, c
     }
   }
 
-  // Legend in the corner of the plot that hides the fewest drawn points; the "without ground truth" entry only when such poses exist.
+  // Legend in the corner of the plot that hides the fewest drawn points; the "without ground truth" entry only when
+  // such poses exist.
   {
     enum Kind { kGroundTruth, kEstimate, kUnmatchedPose, kDifference, kStart };
     std::vector<std::pair<Kind, std::string>> entries = {{kGroundTruth, "ground truth"},

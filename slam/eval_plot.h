@@ -27,10 +27,10 @@
 namespace hf {
 
 struct TrajectoryPlotOptions {
-  int width_px = 1100;   // at least 400
-  int height_px = 850;   // at least 300
-  int drop_axis = -1;    // -1: automatic (see above); 0, 1, 2: drop x, y or z
-  std::string title;     // first title line; empty: "ground truth vs aligned estimate"
+  int width_px = 1100;  // at least 400
+  int height_px = 850;  // at least 300
+  int drop_axis = -1;   // -1: automatic (see above); 0, 1, 2: drop x, y or z
+  std::string title;    // first title line; empty: "ground truth vs aligned estimate"
 };
 
 // Renders the plot of `result` (from evaluate_trajectory(gt, est) on these same trajectories) as RGB.

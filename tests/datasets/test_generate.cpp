@@ -33,6 +33,10 @@ class Generate : public ::testing::Test {
              ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(root_);
     fs::create_directories(root_);
+    // A 160x120 camera keeps the renders fast; the writer and reader do not care about the size.
+    small_camera_ = PinholeCamera::preset("ros").scaled(2);
+    camera_file_ = (root_ / "small_camera.json").string();
+    small_camera_.save(camera_file_);
   }
   void TearDown() override { fs::remove_all(root_); }
 
@@ -52,11 +56,13 @@ class Generate : public ::testing::Test {
   }
 
   fs::path root_;
+  PinholeCamera small_camera_;
+  std::string camera_file_;
 };
 
 TEST_F(Generate, WritesAReadableTumFolder) {
   const fs::path out = root_ / "seq";
-  run({"--preset", "room", "--frames", "4", "--seed", "7", "--out", out.string(), "--camera", "ros"});
+  run({"--preset", "room", "--frames", "4", "--seed", "7", "--out", out.string(), "--camera", camera_file_});
   for (const char* f : {"rgb.txt", "depth.txt", "groundtruth.txt", "camera.json"}) EXPECT_TRUE(fs::exists(out / f)) << f;
   EXPECT_FALSE(fs::exists(out.string() + ".tmp"));
   EXPECT_EQ(std::distance(fs::directory_iterator(out / "rgb"), fs::directory_iterator{}), 4);
@@ -68,6 +74,7 @@ TEST_F(Generate, WritesAReadableTumFolder) {
   o.preset = "room";
   o.frames = 4;
   o.seed = 7;
+  o.camera = small_camera_;
   const SyntheticSequence seq(o);
   EXPECT_EQ(PinholeCamera::load((out / "camera.json").string()), seq.camera());
 
@@ -98,7 +105,7 @@ TEST_F(Generate, WritesAReadableTumFolder) {
 }
 
 TEST_F(Generate, SameSeedSameBytesDifferentSeedDifferentNoise) {
-  const std::vector<std::string> base{"--preset", "wall", "--frames", "2", "--camera", "ros"};
+  const std::vector<std::string> base{"--preset", "wall", "--frames", "2", "--camera", camera_file_};
   auto args = [&](const std::string& seed, const fs::path& out) {
     std::vector<std::string> a = base;
     for (const auto& s : {std::string("--seed"), seed, std::string("--out"), out.string()}) a.push_back(s);
@@ -120,10 +127,11 @@ TEST_F(Generate, SameSeedSameBytesDifferentSeedDifferentNoise) {
 
 TEST_F(Generate, NoNoiseWritesExactDepthUpToPngQuantisation) {
   const fs::path out = root_ / "exact";
-  run({"--preset", "sphere", "--frames", "1", "--no-noise", "--out", out.string()});
+  run({"--preset", "sphere", "--frames", "1", "--no-noise", "--out", out.string(), "--camera", camera_file_});
   SyntheticOptions o;
   o.preset = "sphere";
   o.frames = 1;
+  o.camera = small_camera_;
   o.noise_enabled = false;
   const SyntheticFrame f = SyntheticSequence(o).frame(0);
   const DepthImage d = load_depth((out / "depth" / (tum_stamp(0.0) + ".png")).string());
@@ -164,9 +172,13 @@ TEST_F(Generate, BadArgumentsGiveAClearError) {
   m = error_of([&] { run({"--frames", "1", "--out", ex}); });
   EXPECT_NE(m.find("already exists"), std::string::npos) << m;
   EXPECT_TRUE(fs::exists(root_ / "exists" / "keep.txt"));
-  run({"--frames", "1", "--out", ex, "--force", "--camera", "ros"});
+  run({"--frames", "1", "--out", ex, "--force", "--camera", camera_file_});
+  EXPECT_EQ(PinholeCamera::load(ex + "/camera.json"), small_camera_);
   EXPECT_FALSE(fs::exists(root_ / "exists" / "keep.txt"));
   EXPECT_TRUE(fs::exists(root_ / "exists" / "rgb.txt"));
+
+  m = error_of([&] { run({"--frames", "1", "--out", out, "--camera", "fr9"}); });
+  EXPECT_NE(m.find("'fr9'"), std::string::npos) << m;
 
   // A missing --out is CLI11's required-option error.
   EXPECT_THROW(run({"--frames", "1"}), CLI::RequiredError);

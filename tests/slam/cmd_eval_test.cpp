@@ -25,7 +25,8 @@ class CmdEval : public ::testing::Test {
     for (int k = 0; k <= 90; ++k) {
       const double t = 10.0 + k / 30.0;
       gt.push_back({t, SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.5 * (t - 10.0), 0.2 * (k % 3), 0))});
-      est.push_back({t + 0.003, SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.6 * (t - 10.0), 0.2 * (k % 3), 0))});
+      est.push_back(
+          {t + 0.003, SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.6 * (t - 10.0), 0.2 * (k % 3), 0))});
     }
     write_tum_trajectory(path("gt.txt"), gt);
     write_tum_trajectory(path("est.txt"), est);
@@ -58,9 +59,9 @@ class CmdEval : public ::testing::Test {
 TEST_F(CmdEval, JsonHasTheDocumentedFieldsAndValues) {
   const std::string out = run({"--gt", path("gt.txt"), "--est", path("est.txt"), "--json"});
   const nlohmann::json j = nlohmann::json::parse(out);
-  for (const char* key : {"pairs", "ate_rmse_m", "ate_mean_m", "ate_median_m", "ate_std_m", "ate_min_m", "ate_max_m",
-                          "rpe_pairs", "rpe_trans_rmse_m_per_s", "rpe_trans_mean_m_per_s", "rpe_rot_rmse_deg_per_s",
-                          "rpe_rot_mean_deg_per_s"}) {
+  for (const char* key :
+       {"pairs", "ate_rmse_m", "ate_mean_m", "ate_median_m", "ate_std_m", "ate_min_m", "ate_max_m", "rpe_pairs",
+        "rpe_trans_rmse_m_per_s", "rpe_trans_mean_m_per_s", "rpe_rot_rmse_deg_per_s", "rpe_rot_mean_deg_per_s"}) {
     EXPECT_TRUE(j.contains(key)) << key;
   }
   EXPECT_EQ(j.at("pairs"), 91);

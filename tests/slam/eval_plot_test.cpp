@@ -3,11 +3,11 @@
 #include "slam/eval_plot.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
-#include <unistd.h>
 
 #include "core/error.h"
 
@@ -18,8 +18,9 @@ Trajectory circle(double radius_m, double z_m) {
   Trajectory out;
   for (int k = 0; k <= 120; ++k) {
     const double t = k / 30.0, a = 2.0 * M_PI * k / 120.0;
-    out.push_back({t, SE3(Eigen::Quaterniond(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ())),
-                          Eigen::Vector3d(radius_m * std::cos(a), radius_m * std::sin(a), z_m + 0.01 * std::sin(3 * a)))});
+    out.push_back(
+        {t, SE3(Eigen::Quaterniond(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ())),
+                Eigen::Vector3d(radius_m * std::cos(a), radius_m * std::sin(a), z_m + 0.01 * std::sin(3 * a)))});
   }
   return out;
 }
@@ -46,7 +47,8 @@ int count_pixels(const ColorImage& img, bool (*pred)(const Rgb8&)) {
 TEST(TrajectoryPlot, DrawsGroundTruthEstimateAndColourBar) {
   const Trajectory gt = circle(1.0, 0.5);
   Trajectory est = circle(1.1, 0.5);  // 10 cm too large: ATE ~ 5 cm after alignment
-  for (StampedPose& p : est) p.T_world_camera = SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(2, 0, 0)) * p.T_world_camera;
+  for (StampedPose& p : est)
+    p.T_world_camera = SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(2, 0, 0)) * p.T_world_camera;
   const EvalResult r = evaluate_trajectory(gt, est);
   const ColorImage img = render_trajectory_plot(gt, est, r, sized(900, 700));
   ASSERT_EQ(img.width(), 900);
@@ -54,7 +56,8 @@ TEST(TrajectoryPlot, DrawsGroundTruthEstimateAndColourBar) {
   // Black ground truth, and saturated viridis colours (the estimate and the colour bar) are present.
   EXPECT_GT(count_pixels(img, [](const Rgb8& p) { return p.r < 40 && p.g < 40 && p.b < 40; }), 2000);
   EXPECT_GT(count_pixels(img, [](const Rgb8& p) { return p.g > 150 && p.b < 100 && p.r > 150; }), 100);  // yellow
-  EXPECT_GT(count_pixels(img, [](const Rgb8& p) { return p.b > 80 && p.r > 40 && p.r < 90 && p.g < 40; }), 100);  // purple
+  EXPECT_GT(count_pixels(img, [](const Rgb8& p) { return p.b > 80 && p.r > 40 && p.r < 90 && p.g < 40; }),
+            100);  // purple
   // The picture is mostly background.
   EXPECT_GT(count_pixels(img, [](const Rgb8& p) { return p.r == 255 && p.g == 255 && p.b == 255; }),
             img.width() * img.height() / 2);

@@ -5,10 +5,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <random>
-
-#include <nlohmann/json.hpp>
 
 #include "core/error.h"
 #include "io/trajectory_io.h"
@@ -348,9 +347,9 @@ TEST(Metrics, JsonAndMarkdownCarryEveryField) {
   EXPECT_GT(r.ate.error_m.rmse, 0.01);
   EXPECT_GT(r.rpe.rot_deg_per_s.rmse, -1.0);
   const nlohmann::json j = metrics_to_json(r.metrics());
-  for (const char* key : {"pairs", "ate_rmse_m", "ate_mean_m", "ate_median_m", "ate_std_m", "ate_min_m", "ate_max_m",
-                          "rpe_pairs", "rpe_trans_rmse_m_per_s", "rpe_trans_mean_m_per_s", "rpe_rot_rmse_deg_per_s",
-                          "rpe_rot_mean_deg_per_s"}) {
+  for (const char* key :
+       {"pairs", "ate_rmse_m", "ate_mean_m", "ate_median_m", "ate_std_m", "ate_min_m", "ate_max_m", "rpe_pairs",
+        "rpe_trans_rmse_m_per_s", "rpe_trans_mean_m_per_s", "rpe_rot_rmse_deg_per_s", "rpe_rot_mean_deg_per_s"}) {
     ASSERT_TRUE(j.contains(key)) << key;
     EXPECT_TRUE(j.at(key).is_number()) << key;
   }
@@ -410,8 +409,8 @@ TEST_F(TumGroundTruth, AgainstACopyDelayedByOneSampleMeasuresTheMotion) {
   // The unaligned per-pose error bounds the aligned RMSE from above (alignment minimises it).
   double sum_sq = 0.0;
   for (const AtePair& p : r.ate.pairs) {
-    sum_sq += (gt_[p.gt_index].T_world_camera.translation() - est[p.est_index].T_world_camera.translation())
-                  .squaredNorm();
+    sum_sq +=
+        (gt_[p.gt_index].T_world_camera.translation() - est[p.est_index].T_world_camera.translation()).squaredNorm();
   }
   EXPECT_LE(r.ate.error_m.rmse, std::sqrt(sum_sq / double(r.ate.pairs.size())) + 1e-12);
 }
