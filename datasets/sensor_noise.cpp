@@ -206,6 +206,7 @@ DepthImage apply_depth_noise(const DepthImage& clean, const Image<float>& incide
   const Image<std::uint8_t> holes =
       o.hole_fraction > 0.0 ? hole_mask(W, H, o.hole_fraction, o.hole_blob_px, seed, frame) : Image<std::uint8_t>();
   const double max_theta = o.max_incidence_deg * std::numbers::pi / 180.0;
+  const double lateral_scale = W / 640.0;  // the model's pixels are those of a 640-wide Kinect image
 
   auto is_edge = [&](int x, int y) {
     const double z = clean(x, y);
@@ -228,7 +229,7 @@ DepthImage apply_depth_noise(const DepthImage& clean, const Image<float>& incide
       const double u_edge = rng.uniform();
       int sx = x, sy = y;
       if (o.lateral && clean(x, y) > 0.0f) {
-        const double sl = lateral_sigma_px(incidence(x, y));
+        const double sl = lateral_sigma_px(incidence(x, y)) * lateral_scale;
         sx = std::clamp(int(std::lround(x + sl * n_x)), 0, W - 1);
         sy = std::clamp(int(std::lround(y + sl * n_y)), 0, H - 1);
       }

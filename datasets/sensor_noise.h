@@ -5,8 +5,9 @@
 // Depth, per output pixel (x, y), in this order:
 //  1. Lateral noise (Nguyen et al. 2012): the depth is looked up at the displaced pixel
 //       (round(x + sigma_L n_x), round(y + sigma_L n_y)),  sigma_L(theta) = 0.8 + 0.035 theta / (pi/2 - theta) px,
-//     n_x, n_y ~ N(0, 1), theta the incidence angle at (x, y). Nearest-pixel lookup, clamped to the image, so
-//     edges move but no "flying pixels" are invented. z0 and theta0 below are the values at the looked-up pixel.
+//     n_x, n_y ~ N(0, 1), theta the incidence angle at (x, y). sigma_L is in pixels of a 640-pixel-wide image
+//     (the Kinect's) and is scaled by width / 640, so the angular error is the same at any resolution.
+//     Nearest-pixel lookup, clamped to the image, so edges move but no "flying pixels" are invented. z0 and theta0 below are the values at the looked-up pixel.
 //  2. Range: z0 < min_range_m (0.4) or z0 > max_range_m (4.5) -> missing (0).
 //  3. Grazing angles: theta0 > max_incidence_deg (80 deg) -> missing.
 //  4. Depth edges: if the looked-up pixel has a 4-neighbour with no surface or with |z_n - z0| > edge_relative_jump

@@ -94,6 +94,7 @@ TEST_F(Generate, WritesAReadableTumFolder) {
     ASSERT_TRUE(r.frame.T_world_camera_gt.has_value());
     EXPECT_TRUE(r.frame.T_world_camera_gt->matrix().isApprox(f.T_world_camera.matrix(), 1e-9));
     EXPECT_EQ(r.frame.color.pixels(), f.color.pixels());
+    ASSERT_EQ(r.frame.depth.width(), small_camera_.width);
     ASSERT_EQ(r.frame.depth.size(), f.depth.size());
     for (size_t k = 0; k < f.depth.size(); ++k) {
       const float a = r.frame.depth.data()[k], b = f.depth.data()[k];

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/image.h"
 #include "datasets/presets.h"
+#include "datasets/sensor_noise.h"
 #include "datasets/synthetic_sequence.h"
 #include "datasets/synthetic_source.h"
 
@@ -24,7 +25,7 @@ SyntheticOptions small(const std::string& preset, int frames = 10, std::uint64_t
   o.preset = preset;
   o.frames = frames;
   o.seed = seed;
-  o.camera = PinholeCamera::preset("ros").scaled(1);  // 320x240: the tests do not need full resolution
+  o.camera = PinholeCamera::preset("ros").scaled(2);  // 160x120: the tests do not need full resolution
   return o;
 }
 
@@ -88,17 +89,20 @@ TEST(SyntheticSequence, BackProjectedDepthLiesOnTheSurface) {
           clean_err.push_back(std::abs(seq.scene().sdf(p)));
         }
         if (f.depth(x, y) > 0.0f) {
-          const Vector3d p = f.T_world_camera * cam.backproject(x, y, f.depth(x, y));
-          noisy_err.push_back(std::abs(seq.scene().sdf(p)));
+          // In units of the model's axial standard deviation at that depth (with the rounding's share).
+          const double z = f.depth(x, y), q = quantisation_step_m(z), sz = axial_sigma_m(z, 0.0);
+          const Vector3d p = f.T_world_camera * cam.backproject(x, y, z);
+          noisy_err.push_back(std::abs(seq.scene().sdf(p)) / std::sqrt(sz * sz + q * q / 12.0));
         }
       }
     ASSERT_GT(noisy_err.size(), size_t(cam.width * cam.height / 5)) << preset;
     // Float depth: relative precision 6e-8, at most ~10 m here.
     EXPECT_LT(*std::max_element(clean_err.begin(), clean_err.end()), 2e-6) << preset;
-    // With noise: sigma_z <= 2.8 cm up to 4.5 m plus rounding; lateral shifts only matter at edges.
+    // With noise: the distance to the surface is at most the axial error (less on slanted surfaces), whose
+    // median is 0.67 sigma for a Gaussian; lateral shifts add errors only near depth edges.
     std::sort(noisy_err.begin(), noisy_err.end());
-    EXPECT_LT(noisy_err[noisy_err.size() / 2], 0.01) << preset;
-    EXPECT_LT(noisy_err[noisy_err.size() * 95 / 100], 0.05) << preset;
+    EXPECT_LT(noisy_err[noisy_err.size() / 2], 0.8) << preset;
+    EXPECT_LT(noisy_err[noisy_err.size() * 95 / 100], 4.0) << preset;
   }
 }
 
