@@ -1,24 +1,14 @@
 #include "core/filters.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <cmath>
 #include <string>
 
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/kernels/image_kernels.h"
 
 namespace hf {
 namespace {
-
-// Rows are independent, so the parallel loop is deterministic.
-template <class RowFn>
-void for_each_row(int height, RowFn row) {
-  tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y != rows.end(); ++y) row(y);
-  });
-}
 
 bool positive_finite(float v) { return std::isfinite(v) && v > 0.0f; }
 
@@ -37,7 +27,7 @@ DepthImage bilateral_filter_depth(const DepthImage& depth, const BilateralParams
   const int w = depth.width(), h = depth.height();
   const float* src = depth.data();
   float* dst = out.data();
-  for_each_row(h, [&](int y) {
+  parallel_for_rows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       dst[size_t(y) * w + x] = hf_bilateral_depth_pixel(src, w, h, x, y, radius, inv_two_sigma_s2, inv_two_sigma_r2);
     }
@@ -51,7 +41,7 @@ ImageGradients image_gradients(const Image<float>& image) {
   const float* src = image.data();
   float* gx = g.dx.data();
   float* gy = g.dy.data();
-  for_each_row(h, [&](int y) {
+  parallel_for_rows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const size_t i = size_t(y) * w + x;
       hf_gradient_pixel(src, w, h, x, y, &gx[i], &gy[i]);

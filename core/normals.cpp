@@ -1,27 +1,13 @@
 #include "core/normals.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <cmath>
 #include <string>
 
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/kernels/image_kernels.h"
 
 namespace hf {
-namespace {
-
-// Rows are independent, so the parallel loop is deterministic.
-template <class RowFn>
-void for_each_row(int height, RowFn row) {
-  tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y != rows.end(); ++y) row(y);
-  });
-}
-
-}  // namespace
-
 VertexMap compute_vertex_map(const DepthImage& depth, const PinholeCamera& camera) {
   if (camera.width != depth.width() || camera.height != depth.height()) {
     throw Error("compute_vertex_map: camera is " + std::to_string(camera.width) + "x" + std::to_string(camera.height) +
@@ -33,7 +19,7 @@ VertexMap compute_vertex_map(const DepthImage& depth, const PinholeCamera& camer
   const float* src = depth.data();
   hf_float4* dst = out.data();
   const int w = depth.width();
-  for_each_row(depth.height(), [&](int y) {
+  parallel_for_rows(depth.height(), [&](int y) {
     for (int x = 0; x < w; ++x) dst[size_t(y) * w + x] = hf_vertex_pixel(src, K, x, y);
   });
   return out;
@@ -49,7 +35,7 @@ NormalMap compute_normal_map(const VertexMap& vertices, const NormalParams& p) {
   hf_float4* dst = out.data();
   const int w = vertices.width(), h = vertices.height();
   const float ratio = p.max_depth_jump_ratio;
-  for_each_row(h, [&](int y) {
+  parallel_for_rows(h, [&](int y) {
     for (int x = 0; x < w; ++x) dst[size_t(y) * w + x] = hf_normal_pixel(src, w, h, x, y, ratio);
   });
   return out;

@@ -1,12 +1,11 @@
 #include "core/pyramid.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <cmath>
 #include <string>
 
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/kernels/image_kernels.h"
 
 namespace hf {
@@ -23,17 +22,14 @@ void check_levels(int levels, const char* what) {
   if (levels < 1) throw Error(std::string(what) + ": expected levels >= 1, got " + std::to_string(levels));
 }
 
-// Output rows are independent, so the parallel loop is deterministic.
 template <class PixelFn>
 Image<float> halve(const Image<float>& src, PixelFn pixel) {
   Image<float> dst(src.width() / 2, src.height() / 2);
   const float* s = src.data();
   float* d = dst.data();
   const int w = dst.width();
-  tbb::parallel_for(tbb::blocked_range<int>(0, dst.height()), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y != rows.end(); ++y) {
-      for (int x = 0; x < w; ++x) d[size_t(y) * w + x] = pixel(s, x, y);
-    }
+  parallel_for_rows(dst.height(), [&](int y) {
+    for (int x = 0; x < w; ++x) d[size_t(y) * w + x] = pixel(s, x, y);
   });
   return dst;
 }

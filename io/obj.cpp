@@ -12,31 +12,10 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "io/text_util.h"
 
 namespace hf {
 namespace {
-
-std::string quote(std::string_view s) {
-  std::string out = "'";
-  for (size_t i = 0; i < s.size() && i < 40; ++i) {
-    const unsigned char c = static_cast<unsigned char>(s[i]);
-    out += (c >= 32 && c < 127) ? static_cast<char>(c) : '?';
-  }
-  if (s.size() > 40) out += "...";
-  return out + "'";
-}
-
-std::vector<std::string_view> split_words(std::string_view line) {
-  std::vector<std::string_view> words;
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-    const size_t start = i;
-    while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
-    if (i > start) words.push_back(line.substr(start, i - start));
-  }
-  return words;
-}
 
 void append_float(std::string& out, float v) {
   char tmp[32];
@@ -108,14 +87,14 @@ struct Parser {
     float f = 0;
     const auto r = std::from_chars(tok.data(), tok.data() + tok.size(), f);
     if (r.ptr != tok.data() + tok.size() || r.ec == std::errc::invalid_argument)
-      fail(std::string("expected a number for ") + what + ", got " + quote(tok));
+      fail(std::string("expected a number for ") + what + ", got " + quote_for_message(tok));
     if (r.ec == std::errc::result_out_of_range) {
       // Underflow to a denormal or zero is harmless; overflow is not a coordinate.
       const double d = std::strtod(std::string(tok).c_str(), nullptr);
-      if (std::fabs(d) > 1.0) fail(std::string("expected a finite float for ") + what + ", got " + quote(tok));
+      if (std::fabs(d) > 1.0) fail(std::string("expected a finite float for ") + what + ", got " + quote_for_message(tok));
       f = static_cast<float>(d);
     }
-    if (!std::isfinite(f)) fail(std::string("expected a finite float for ") + what + ", got " + quote(tok));
+    if (!std::isfinite(f)) fail(std::string("expected a finite float for ") + what + ", got " + quote_for_message(tok));
     return f;
   }
 
@@ -125,7 +104,7 @@ struct Parser {
     std::int64_t i = 0;
     const auto r = std::from_chars(tok.data(), tok.data() + tok.size(), i);
     if (r.ec != std::errc() || r.ptr != tok.data() + tok.size())
-      fail(std::string("expected an integer ") + what + " index, got " + quote(tok));
+      fail(std::string("expected an integer ") + what + " index, got " + quote_for_message(tok));
     if (i == 0) fail(std::string("expected a non-zero ") + what + " index (OBJ indices start at 1), got 0");
     if (i < 0) {
       if (-i > defined)
@@ -133,7 +112,7 @@ struct Parser {
              std::to_string(i));
       return defined + i;
     }
-    if (i > std::numeric_limits<int>::max()) fail(std::string("expected a ") + what + " index below 2^31, got " + quote(tok));
+    if (i > std::numeric_limits<int>::max()) fail(std::string("expected a ") + what + " index below 2^31, got " + quote_for_message(tok));
     return i - 1;
   }
 };
@@ -201,7 +180,7 @@ TriangleMesh parse_obj(std::string_view text, const std::string& file) {
           const size_t s2 = c.find('/', s1 + 1);
           if (s2 != std::string_view::npos) ntok = c.substr(s2 + 1);
           if (c.find('/', s2 == std::string_view::npos ? c.size() : s2 + 1) != std::string_view::npos)
-            P.fail("expected a corner 'v', 'v/t', 'v//n' or 'v/t/n', got " + quote(c));
+            P.fail("expected a corner 'v', 'v/t', 'v//n' or 'v/t/n', got " + quote_for_message(c));
         }
         const std::int64_t v = P.index(vtok, static_cast<std::int64_t>(mesh.vertices.size()), "vertex");
         if (v >= static_cast<std::int64_t>(mesh.vertices.size())) forward.push_back({P.lineno, v, false});

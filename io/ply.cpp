@@ -16,6 +16,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "io/text_util.h"
 
 namespace hf {
 namespace {
@@ -110,29 +111,6 @@ struct Header {
   int end_header_line = 0;
 };
 
-// Quotes (a prefix of) untrusted text for an error message: printable ASCII only, at most 40 characters.
-std::string quote(std::string_view s) {
-  std::string out = "'";
-  for (size_t i = 0; i < s.size() && i < 40; ++i) {
-    const unsigned char c = static_cast<unsigned char>(s[i]);
-    out += (c >= 32 && c < 127) ? static_cast<char>(c) : '?';
-  }
-  if (s.size() > 40) out += "...";
-  return out + "'";
-}
-
-std::vector<std::string_view> split_words(std::string_view line) {
-  std::vector<std::string_view> words;
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
-    const size_t start = i;
-    while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
-    if (i > start) words.push_back(line.substr(start, i - start));
-  }
-  return words;
-}
-
 Header parse_header(std::string_view bytes, const std::string& file) {
   Header h;
   size_t pos = 0;
@@ -142,7 +120,7 @@ Header parse_header(std::string_view bytes, const std::string& file) {
     const size_t nl = bytes.find('\n', pos);
     if (nl == std::string_view::npos) {
       if (lineno == 0 && bytes.substr(0, 3) != "ply")
-        throw ParseError(file, 1, "expected 'ply' as the first line, got " + quote(bytes));
+        throw ParseError(file, 1, "expected 'ply' as the first line, got " + quote_for_message(bytes));
       throw ParseError(file, lineno + 1, "expected 'end_header' before the end of the file");
     }
     std::string_view line = bytes.substr(pos, nl - pos);
@@ -150,7 +128,7 @@ Header parse_header(std::string_view bytes, const std::string& file) {
     pos = nl + 1;
     ++lineno;
     if (lineno == 1) {
-      if (line != "ply") throw ParseError(file, 1, "expected 'ply' as the first line, got " + quote(line));
+      if (line != "ply") throw ParseError(file, 1, "expected 'ply' as the first line, got " + quote_for_message(line));
       continue;
     }
     const std::vector<std::string_view> w = split_words(line);
@@ -161,22 +139,22 @@ Header parse_header(std::string_view bytes, const std::string& file) {
       if (have_format) throw ParseError(file, lineno, "expected one 'format' line, got a second one");
       if (w.size() != 3 || w[2] != "1.0")
         throw ParseError(file, lineno, "expected 'format ascii|binary_little_endian|binary_big_endian 1.0', got " +
-                                           quote(line));
+                                           quote_for_message(line));
       if (w[1] == "ascii") h.format = PlyFormat::ascii;
       else if (w[1] == "binary_little_endian") h.format = PlyFormat::binary_little_endian;
       else if (w[1] == "binary_big_endian") h.format = PlyFormat::binary_big_endian;
       else
         throw ParseError(file, lineno,
-                         "expected format ascii, binary_little_endian or binary_big_endian, got " + quote(w[1]));
+                         "expected format ascii, binary_little_endian or binary_big_endian, got " + quote_for_message(w[1]));
       have_format = true;
     } else if (key == "element") {
-      if (w.size() != 3) throw ParseError(file, lineno, "expected 'element NAME COUNT', got " + quote(line));
+      if (w.size() != 3) throw ParseError(file, lineno, "expected 'element NAME COUNT', got " + quote_for_message(line));
       Element e;
       e.name = std::string(w[1]);
       e.header_line = lineno;
       const auto r = std::from_chars(w[2].data(), w[2].data() + w[2].size(), e.count);
       if (r.ec != std::errc() || r.ptr != w[2].data() + w[2].size())
-        throw ParseError(file, lineno, "expected a non-negative element count, got " + quote(w[2]));
+        throw ParseError(file, lineno, "expected a non-negative element count, got " + quote_for_message(w[2]));
       for (const Element& other : h.elements)
         if (other.name == e.name) throw ParseError(file, lineno, "expected one element '" + e.name + "', got a second one");
       h.elements.push_back(std::move(e));
@@ -185,20 +163,20 @@ Header parse_header(std::string_view bytes, const std::string& file) {
       Property p;
       if (w.size() >= 2 && w[1] == "list") {
         if (w.size() != 5)
-          throw ParseError(file, lineno, "expected 'property list COUNT_TYPE ITEM_TYPE NAME', got " + quote(line));
+          throw ParseError(file, lineno, "expected 'property list COUNT_TYPE ITEM_TYPE NAME', got " + quote_for_message(line));
         if (!parse_scalar(w[2], &p.count_type) || !is_integer(p.count_type))
           throw ParseError(file, lineno, "expected an integer list count type (uchar, ushort, uint, ...), got " +
-                                             quote(w[2]));
+                                             quote_for_message(w[2]));
         if (!parse_scalar(w[3], &p.type))
           throw ParseError(file, lineno, "expected a PLY scalar type (char uchar short ushort int uint float double), got " +
-                                             quote(w[3]));
+                                             quote_for_message(w[3]));
         p.is_list = true;
         p.name = std::string(w[4]);
       } else {
-        if (w.size() != 3) throw ParseError(file, lineno, "expected 'property TYPE NAME', got " + quote(line));
+        if (w.size() != 3) throw ParseError(file, lineno, "expected 'property TYPE NAME', got " + quote_for_message(line));
         if (!parse_scalar(w[1], &p.type))
           throw ParseError(file, lineno, "expected a PLY scalar type (char uchar short ushort int uint float double), got " +
-                                             quote(w[1]));
+                                             quote_for_message(w[1]));
         p.name = std::string(w[2]);
       }
       for (const Property& other : h.elements.back().properties)
@@ -213,7 +191,7 @@ Header parse_header(std::string_view bytes, const std::string& file) {
       return h;
     } else {
       throw ParseError(file, lineno, "expected 'format', 'element', 'property', 'comment' or 'end_header', got " +
-                                         quote(key));
+                                         quote_for_message(key));
     }
   }
 }
@@ -346,7 +324,7 @@ class AsciiBody {
   }
   void end() {
     const std::string_view extra = token_or_empty();
-    if (!extra.empty()) fail("expected the end of the line, got " + quote(extra));
+    if (!extra.empty()) fail("expected the end of the line, got " + quote_for_message(extra));
   }
 
   double value(Scalar t) {
@@ -357,13 +335,13 @@ class AsciiBody {
     if (t == Scalar::f32) {
       float f = 0;
       const auto r = std::from_chars(b, e, f);
-      if (r.ptr != e || r.ec == std::errc::invalid_argument) fail("expected a float, got " + quote(tok));
+      if (r.ptr != e || r.ec == std::errc::invalid_argument) fail("expected a float, got " + quote_for_message(tok));
       if (r.ec == std::errc::result_out_of_range) return parse_out_of_range(tok);
       return f;
     }
     double d = 0;
     const auto r = std::from_chars(b, e, d);
-    if (r.ptr != e || r.ec == std::errc::invalid_argument) fail("expected a double, got " + quote(tok));
+    if (r.ptr != e || r.ec == std::errc::invalid_argument) fail("expected a double, got " + quote_for_message(tok));
     if (r.ec == std::errc::result_out_of_range) return parse_out_of_range(tok);
     return d;
   }
@@ -383,7 +361,7 @@ class AsciiBody {
     if (rest != std::string_view::npos) {
       const int line = lineno_ + 1 + static_cast<int>(std::count(body_.begin() + pos_, body_.begin() + rest, '\n'));
       throw ParseError(file_, line, "expected the end of the file after the last element, got " +
-                                        quote(body_.substr(rest, body_.find('\n', rest) - rest)));
+                                        quote_for_message(body_.substr(rest, body_.find('\n', rest) - rest)));
     }
   }
 
@@ -405,7 +383,7 @@ class AsciiBody {
     const auto r = std::from_chars(tok.data(), tok.data() + tok.size(), v);
     if (r.ec != std::errc() || r.ptr != tok.data() + tok.size() || v < lo || v > hi)
       fail(std::string("expected an integer of type ") + scalar_name(t) + " (" + std::to_string(lo) + ".." +
-           std::to_string(hi) + "), got " + quote(tok));
+           std::to_string(hi) + "), got " + quote_for_message(tok));
     return v;
   }
   // from_chars reports overflow and underflow alike; keep the sign and the magnitude class.
