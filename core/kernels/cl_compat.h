@@ -12,6 +12,9 @@
 #define HF_CONSTANT __constant
 #define HF_INLINE inline
 typedef float4 hf_float4;
+typedef short hf_int16;
+typedef ushort hf_uint16;
+typedef uchar hf_uint8;
 HF_INLINE hf_float4 hf_make_float4(float x, float y, float z, float w) { return (float4)(x, y, z, w); }
 #define hf_sqrt sqrt
 #define hf_fabs fabs
@@ -20,6 +23,10 @@ HF_INLINE hf_float4 hf_make_float4(float x, float y, float z, float w) { return 
 #define hf_isfinite isfinite
 #else
 #include <cmath>
+#include <cstdint>
+typedef std::int16_t hf_int16;
+typedef std::uint16_t hf_uint16;
+typedef std::uint8_t hf_uint8;
 #define HF_GLOBAL
 #define HF_CONSTANT
 #define HF_INLINE inline

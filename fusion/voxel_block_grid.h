@@ -1,0 +1,103 @@
+// The sparse volume: 8x8x8 voxel blocks in a spatial hash keyed by integer block coordinates (Niessner et al. 2013).
+//
+// Geometry: voxel (i, j, k) of the world grid has its centre at ((i, j, k) + 0.5) * voxel_m in the world frame;
+// block (bx, by, bz) holds the voxels i in [8 bx, 8 bx + 8), likewise j, k. Only blocks near observed surfaces
+// exist ("model only what a scene needs"); a voxel of a missing block is "unobserved" (weight 0).
+//
+// Memory: blocks live in a pool of `capacity_blocks` preallocated VoxelBlocks; the hash maps a BlockCoord to its
+// pool slot. When the pool is full, allocate() throws CapacityError (typed, loud) unless streaming has room to
+// evict (see fusion/streaming.h): never a silent stop (InfiniTAM's failure mode).
+//
+// Thread-safety: find() and voxel reads may run concurrently with each other; allocate() is thread-safe against
+// other allocate() calls and find() (allocation happens in a separate phase before integration writes voxels);
+// writing voxels of distinct blocks from different threads is safe; release() and clear() need exclusive access.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/error.h"
+#include "fusion/kernels/voxel.h"
+
+namespace hf::fusion {
+
+using Voxel = hf_voxel;
+static_assert(sizeof(Voxel) == 8, "8 bytes per voxel with colour");
+
+struct VoxelBlock {
+  std::array<Voxel, HF_VOXELS_PER_BLOCK> voxels{};  // index hf_voxel_index(x, y, z)
+};
+
+struct BlockCoord {
+  int x = 0, y = 0, z = 0;
+  bool operator==(const BlockCoord&) const = default;
+};
+
+struct BlockCoordHash {
+  // Niessner's hash: (x * 73856093) ^ (y * 19349669) ^ (z * 83492791), on unsigned to avoid overflow UB.
+  size_t operator()(const BlockCoord& c) const {
+    return size_t((std::uint32_t(c.x) * 73856093u) ^ (std::uint32_t(c.y) * 19349669u) ^ (std::uint32_t(c.z) * 83492791u));
+  }
+};
+
+// The voxel pool is full and nothing can be evicted.
+class CapacityError : public Error {
+ public:
+  using Error::Error;
+};
+
+struct VolumeParams {
+  double voxel_m = 0.01;           // voxel edge length
+  double truncation_vox = 4.0;     // mu = truncation_vox * voxel_m
+  float max_weight = 128.0f;       // running-average weight cap (lets the model follow slow changes)
+  size_t capacity_blocks = 1 << 17;  // pool size: 131072 blocks = 512 MiB at 4 KiB per block
+  double truncation_m() const { return truncation_vox * voxel_m; }
+  double block_m() const { return HF_BLOCK_SIZE * voxel_m; }
+  void validate() const;  // throws hf::Error naming the bad field
+};
+
+class VoxelBlockGrid {
+ public:
+  explicit VoxelBlockGrid(const VolumeParams& params);
+
+  const VolumeParams& params() const { return params_; }
+
+  // nullptr when the block does not exist.
+  VoxelBlock* find(const BlockCoord& c);
+  const VoxelBlock* find(const BlockCoord& c) const;
+  // Returns the existing block or a new one with all voxels zero (unobserved). Thread-safe. Throws CapacityError.
+  VoxelBlock* allocate(const BlockCoord& c);
+  // Frees a block (its slot returns to the pool). Not thread-safe.
+  void release(const BlockCoord& c);
+  void clear();
+
+  size_t block_count() const;
+  size_t capacity_blocks() const { return params_.capacity_blocks; }
+  // Bytes held by allocated blocks (block_count() * sizeof(VoxelBlock)) and by the hash entries.
+  size_t memory_bytes() const;
+
+  // Calls f(coord, block) for every allocated block, in an unspecified but deterministic order.
+  void for_each_block(const std::function<void(const BlockCoord&, const VoxelBlock&)>& f) const;
+  void for_each_block(const std::function<void(const BlockCoord&, VoxelBlock&)>& f);
+  std::vector<BlockCoord> block_coords() const;  // sorted (z, y, x)
+
+  // World point -> block containing it; world point -> continuous voxel coordinates (voxel centres at integers).
+  BlockCoord block_of(const Eigen::Vector3d& p_world) const;
+  Eigen::Vector3d voxel_coords(const Eigen::Vector3d& p_world) const { return p_world / params_.voxel_m - Eigen::Vector3d::Constant(0.5); }
+  // The voxel at integer world-grid index (i, j, k), or nullptr when its block does not exist.
+  const Voxel* voxel(int i, int j, int k) const;
+  Voxel* voxel(int i, int j, int k);
+
+ private:
+  VolumeParams params_;
+  struct Impl;
+  std::shared_ptr<Impl> impl_;
+};
+
+}  // namespace hf::fusion
