@@ -32,7 +32,8 @@ void SyntheticSequence::check_index(int i) const {
 }
 
 double SyntheticSequence::timestamp_s(int i) const {
-  return std::round(1e6 * double(i) / options_.frame_rate_hz) * 1e-6;
+  // Divide (correctly rounded) rather than multiply by 1e-6, so the stamp is the double nearest to its 6-decimal text.
+  return std::round(1e6 * double(i) / options_.frame_rate_hz) / 1e6;
 }
 
 SE3 SyntheticSequence::T_world_camera(int i) const {

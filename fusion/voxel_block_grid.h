@@ -4,13 +4,16 @@
 // block (bx, by, bz) holds the voxels i in [8 bx, 8 bx + 8), likewise j, k. Only blocks near observed surfaces
 // exist ("model only what a scene needs"); a voxel of a missing block is "unobserved" (weight 0).
 //
-// Memory: blocks live in a pool of `capacity_blocks` preallocated VoxelBlocks; the hash maps a BlockCoord to its
-// pool slot. When the pool is full, allocate() throws CapacityError (typed, loud) unless streaming has room to
-// evict (see fusion/streaming.h): never a silent stop (InfiniTAM's failure mode).
+// Memory: blocks live in a pool of at most `capacity_blocks` VoxelBlocks, handed out in chunks of 1024 blocks as
+// they are needed (so memory follows the blocks in use, not the capacity); the hash maps a BlockCoord to its pool
+// slot. When the pool is full, allocate() throws CapacityError (typed, loud; the message says the capacity and
+// how to raise it): never a silent stop (InfiniTAM's failure mode). Streaming (fusion/streaming.h) moves distant
+// blocks out of the pool to make room.
 //
-// Thread-safety: find() and voxel reads may run concurrently with each other; allocate() is thread-safe against
-// other allocate() calls and find() (allocation happens in a separate phase before integration writes voxels);
-// writing voxels of distinct blocks from different threads is safe; release() and clear() need exclusive access.
+// Thread-safety: find() and voxel reads may run concurrently with each other and with allocate(); allocate() is
+// thread-safe against other allocate() calls (each coordinate gets exactly one block however many threads ask);
+// block pointers stay valid until that block is released or the grid cleared; writing voxels of distinct blocks
+// from different threads is safe; release() and clear() need exclusive access. The grid is move-only.
 #pragma once
 
 #include <array>
@@ -18,6 +21,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -56,15 +60,23 @@ struct VolumeParams {
   double voxel_m = 0.01;           // voxel edge length
   double truncation_vox = 4.0;     // mu = truncation_vox * voxel_m
   float max_weight = 128.0f;       // running-average weight cap (lets the model follow slow changes)
-  size_t capacity_blocks = 1 << 17;  // pool size: 131072 blocks = 512 MiB at 4 KiB per block
+  size_t capacity_blocks = 1 << 17;  // pool size: 131072 blocks = 512 MiB at 4 KiB per block (1 .. 2^26)
   double truncation_m() const { return truncation_vox * voxel_m; }
   double block_m() const { return HF_BLOCK_SIZE * voxel_m; }
-  void validate() const;  // throws hf::Error naming the bad field
+  // Throws hf::Error naming the bad field: voxel_m in (0, 10], truncation_vox in [1, 64] (at least one voxel so
+  // a zero crossing is always sampled; at most 8 blocks), max_weight in [1, 4095] (fits the uint16 weight),
+  // capacity_blocks in [1, 2^26].
+  void validate() const;
 };
 
 class VoxelBlockGrid {
  public:
-  explicit VoxelBlockGrid(const VolumeParams& params);
+  explicit VoxelBlockGrid(const VolumeParams& params);  // validates params
+  ~VoxelBlockGrid();
+  VoxelBlockGrid(VoxelBlockGrid&&) noexcept;
+  VoxelBlockGrid& operator=(VoxelBlockGrid&&) noexcept;
+  VoxelBlockGrid(const VoxelBlockGrid&) = delete;
+  VoxelBlockGrid& operator=(const VoxelBlockGrid&) = delete;
 
   const VolumeParams& params() const { return params_; }
 
@@ -73,8 +85,11 @@ class VoxelBlockGrid {
   const VoxelBlock* find(const BlockCoord& c) const;
   // Returns the existing block or a new one with all voxels zero (unobserved). Thread-safe. Throws CapacityError.
   VoxelBlock* allocate(const BlockCoord& c);
-  // Frees a block (its slot returns to the pool). Not thread-safe.
-  void release(const BlockCoord& c);
+  // Like allocate(), and tells whether the block was created by this call.
+  VoxelBlock* allocate(const BlockCoord& c, bool* created);
+  // Frees a block (its slot returns to the pool; its memory is kept for reuse). Returns false when it did not
+  // exist. Not thread-safe.
+  bool release(const BlockCoord& c);
   void clear();
 
   size_t block_count() const;
@@ -82,10 +97,15 @@ class VoxelBlockGrid {
   // Bytes held by allocated blocks (block_count() * sizeof(VoxelBlock)) and by the hash entries.
   size_t memory_bytes() const;
 
-  // Calls f(coord, block) for every allocated block, in an unspecified but deterministic order.
+  // Calls f(coord, block) for every allocated block, in block_coords() order (deterministic). f must not
+  // allocate or release blocks.
   void for_each_block(const std::function<void(const BlockCoord&, const VoxelBlock&)>& f) const;
   void for_each_block(const std::function<void(const BlockCoord&, VoxelBlock&)>& f);
   std::vector<BlockCoord> block_coords() const;  // sorted (z, y, x)
+
+  // (coord, block) of every allocated block in block_coords() order: for parallel loops over blocks.
+  std::vector<std::pair<BlockCoord, VoxelBlock*>> blocks();
+  std::vector<std::pair<BlockCoord, const VoxelBlock*>> blocks() const;
 
   // World point -> block containing it; world point -> continuous voxel coordinates (voxel centres at integers).
   BlockCoord block_of(const Eigen::Vector3d& p_world) const;
@@ -97,7 +117,7 @@ class VoxelBlockGrid {
  private:
   VolumeParams params_;
   struct Impl;
-  std::shared_ptr<Impl> impl_;
+  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace hf::fusion

@@ -5,7 +5,8 @@
 //           in [-mu, mu]; positive in front of the surface (free space), negative behind it;
 //   weight  uint16 in units of 1/HF_WEIGHT_SCALE, 0 = never observed;
 //   r g b   uint8 colour, averaged with the same weights as the SDF;
-//   flags   spare byte (0), keeps the struct at 8 bytes and 2-byte aligned.
+//   flags   bit 0: the colour holds at least one sample (carving observations weigh the SDF but carry no
+//           colour); other bits 0. Keeps the struct at 8 bytes and 2-byte aligned.
 // The quantisation step of sdf is mu/32767 (for mu = 4 cm: 1.2 um), far below any sensor noise.
 #ifndef HF_FUSION_KERNELS_VOXEL_H
 #define HF_FUSION_KERNELS_VOXEL_H
@@ -17,6 +18,7 @@
 #define HF_SDF_SCALE 32767.0f
 #define HF_WEIGHT_SCALE 16.0f
 #define HF_WEIGHT_MAX_RAW 65535
+#define HF_VOXEL_FLAG_COLOUR 1
 
 typedef struct {
   hf_int16 sdf;

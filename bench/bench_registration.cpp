@@ -1,0 +1,391 @@
+// Registration benchmark: ms per registration at 640x480 for each method x backend, and the error against ground
+// truth on synthetic pairs (datasets::SyntheticSequence "room") and on consecutive frames of the real TUM
+// sequences in ../shared/data, with PCL's GICP and NDT on the same pairs as reference rows.
+//
+//   build/release/bench/bench_registration                      # Google Benchmark timings (synthetic pair)
+//   build/release/bench/bench_registration --accuracy [--max-pairs N] [--pcl-pairs N]
+//                                                               # the accuracy tables (markdown on stdout)
+//
+// Methods and backends come from the registries (registration_names(), backend_names()); a backend that cannot
+// be created here (e.g. opencl without a platform) is reported and skipped. Results: bench/results/registration.md.
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "bench/pcl_reference.h"
+#include "core/error.h"
+#include "datasets/synthetic_sequence.h"
+#include "io/dataset.h"
+#include "registration/frame_pyramid.h"
+#include "registration/cpu_backend.h"
+#include "registration/registration.h"
+#ifdef HF_BENCH_HAVE_OPENCL
+#include "registration/opencl/opencl_backend.h"
+#endif
+
+namespace hf {
+namespace {
+
+#ifndef HF_SHARED_DIR
+#define HF_SHARED_DIR "../shared"
+#endif
+
+struct Pair {
+  FramePyramid cur, ref;
+  SE3 T_ref_cur_true;
+  std::vector<Eigen::Vector3f> cur_points, ref_points;  // level-0 vertices, for PCL
+};
+
+struct PairSet {
+  std::string name;
+  std::vector<Pair> pairs;
+};
+
+double elapsed_ms(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::vector<Eigen::Vector3f> points_of(const VertexMap& v) {
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(v.size());
+  for (const hf_float4& p : v.pixels()) {
+    if (p.w != 0.0f) out.emplace_back(p.x, p.y, p.z);
+  }
+  return out;
+}
+
+Pair make_pair_of(const DepthImage& d_ref, const ColorImage& c_ref, const SE3& T_w_ref, const DepthImage& d_cur,
+                  const ColorImage& c_cur, const SE3& T_w_cur, const PinholeCamera& camera) {
+  Pair p;
+  p.ref = build_frame_pyramid(d_ref, &c_ref, camera);
+  p.cur = build_frame_pyramid(d_cur, &c_cur, camera);
+  p.T_ref_cur_true = T_w_ref.inverse() * T_w_cur;
+  p.ref_points = points_of(p.ref.levels[0].vertices);
+  p.cur_points = points_of(p.cur.levels[0].vertices);
+  return p;
+}
+
+// Consecutive frames k, k+1 of the synthetic room (with sensor noise), 640x480.
+PairSet synthetic_pairs(int count) {
+  datasets::SyntheticOptions options;
+  options.preset = "room";
+  options.frames = count + 1;
+  datasets::SyntheticSequence seq(options);
+  PairSet set{"synthetic room (noisy, consecutive frames)", {}};
+  datasets::SyntheticFrame prev = seq.frame(0);
+  for (int i = 1; i <= count; ++i) {
+    datasets::SyntheticFrame next = seq.frame(i);
+    set.pairs.push_back(make_pair_of(prev.depth, prev.color, prev.T_world_camera, next.depth, next.color,
+                                     next.T_world_camera, seq.camera()));
+    prev = std::move(next);
+  }
+  return set;
+}
+
+// Consecutive frames of a TUM folder with ground truth for both.
+PairSet tum_pairs(const std::string& folder, int max_pairs) {
+  DatasetOptions options;
+  options.prefetch_frames = 0;
+  std::unique_ptr<FrameSource> source = open_dataset(folder, options);
+  PairSet set{"TUM " + std::filesystem::path(folder).filename().string() + " (consecutive frames)", {}};
+  std::optional<RgbdFrame> prev;
+  while (int(set.pairs.size()) < max_pairs) {
+    FrameRead read = source->next();
+    if (read.status == FrameStatus::end) break;
+    if (read.status != FrameStatus::ok || !read.frame.T_world_camera_gt) {
+      prev.reset();
+      continue;
+    }
+    if (prev) {
+      set.pairs.push_back(make_pair_of(prev->depth, prev->color, *prev->T_world_camera_gt, read.frame.depth,
+                                       read.frame.color, *read.frame.T_world_camera_gt, source->camera()));
+    }
+    prev = std::move(read.frame);
+  }
+  return set;
+}
+
+struct Errors {
+  double t_mm = 0.0, r_deg = 0.0;
+};
+
+Errors error_of(const SE3& T_est, const SE3& T_true) {
+  const SE3 E = T_true.inverse() * T_est;
+  const Eigen::AngleAxisd aa(E.rotation());
+  return {E.translation().norm() * 1e3, std::fabs(aa.angle()) * 180.0 / M_PI};
+}
+
+double mean(const std::vector<double>& v) {
+  return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / double(v.size());
+}
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+struct Row {
+  std::string method, backend;
+  std::vector<double> ms, t_mm, r_deg, iterations;
+  std::map<std::string, int> statuses;
+};
+
+void print_row(const Row& r) {
+  std::string st;
+  for (const auto& [name, n] : r.statuses) st += (st.empty() ? "" : ", ") + name + " " + std::to_string(n);
+  std::printf("| %s | %s | %zu | %.1f | %.1f | %.2f / %.2f | %.3f / %.3f | %s |\n", r.method.c_str(),
+              r.backend.c_str(), r.ms.size(), mean(r.ms), mean(r.iterations), mean(r.t_mm), median(r.t_mm),
+              mean(r.r_deg), median(r.r_deg), st.c_str());
+}
+
+std::vector<std::string> usable_backends() {
+  std::vector<std::string> out;
+  for (const std::string& b : backend_names()) {
+    try {
+      make_backend(b);
+      out.push_back(b);
+    } catch (const Error& e) {
+      std::printf("(backend %s skipped: %s)\n", b.c_str(), e.what());
+    }
+  }
+  return out;
+}
+
+void accuracy_table(const PairSet& set, int pcl_pairs) {
+  std::printf("\n### %s: %zu pairs\n\n", set.name.c_str(), set.pairs.size());
+  std::printf("| method | backend | pairs | ms / registration | iterations | trans. error mean / median (mm) | "
+              "rot. error mean / median (deg) | status |\n|---|---|---|---|---|---|---|---|\n");
+  {
+    Row identity{"(identity: no motion estimated)", "-", {}, {}, {}, {}, {}};
+    for (const Pair& p : set.pairs) {
+      const Errors e = error_of(SE3(), p.T_ref_cur_true);
+      identity.t_mm.push_back(e.t_mm);
+      identity.r_deg.push_back(e.r_deg);
+      identity.ms.push_back(0.0);
+    }
+    print_row(identity);
+  }
+  for (const std::string& method : registration_names()) {
+    for (const std::string& backend : usable_backends()) {
+      std::unique_ptr<Registration> reg = make_registration(method, backend);
+      Row row{method, backend, {}, {}, {}, {}, {}};
+      for (const Pair& p : set.pairs) {
+        const auto start = std::chrono::steady_clock::now();
+        const RegistrationResult res = reg->align(p.cur, p.ref, SE3());
+        row.ms.push_back(elapsed_ms(start));
+        const Errors e = error_of(res.T_ref_cur, p.T_ref_cur_true);
+        row.t_mm.push_back(e.t_mm);
+        row.r_deg.push_back(e.r_deg);
+        row.iterations.push_back(
+            double(std::accumulate(res.iterations_per_level.begin(), res.iterations_per_level.end(), 0)));
+        ++row.statuses[to_string(res.status)];
+      }
+      print_row(row);
+      std::fflush(stdout);
+    }
+  }
+  const int n_pcl = std::min<int>(pcl_pairs, int(set.pairs.size()));
+  for (const char* method : {"gicp", "ndt"}) {
+    Row row{std::string("PCL ") + (std::strcmp(method, "gicp") == 0 ? "GICP" : "NDT") + " (reference)",
+            "PCL, 1 thread", {}, {}, {}, {}, {}};
+    int points = 0;
+    for (int i = 0; i < n_pcl; ++i) {
+      const Pair& p = set.pairs[size_t(i)];
+      const bench::PclAlignResult res = bench::pcl_align(method, p.cur_points, p.ref_points, 0.04f, 0.2f);
+      row.ms.push_back(res.ms);
+      const Errors e = error_of(SE3::from_matrix(res.T_target_source), p.T_ref_cur_true);
+      row.t_mm.push_back(e.t_mm);
+      row.r_deg.push_back(e.r_deg);
+      row.iterations.push_back(0.0);
+      ++row.statuses[res.converged ? "converged" : "not converged"];
+      points += res.source_points;
+    }
+    if (n_pcl > 0) {
+      row.backend += ", ~" + std::to_string(points / n_pcl) + " pts";
+      print_row(row);
+      std::fflush(stdout);
+    }
+  }
+}
+
+int run_accuracy(int max_pairs, int pcl_pairs) {
+  std::printf("## Accuracy and time per registration (640x480, initial guess = identity, frame to frame)\n");
+  std::printf("\nms / registration: align() only (pyramids built beforehand), mean over the pairs. iterations: "
+              "sum over the pyramid levels, mean. Errors: |t| and angle of T_true^-1 T_est.\n");
+  accuracy_table(synthetic_pairs(std::min(max_pairs, 20)), pcl_pairs);
+  for (const char* name : {"tum_fr1_desk_9frames", "tum_fr1_rpy_first150"}) {
+    const std::string folder = std::string(HF_SHARED_DIR) + "/data/" + name;
+    if (!std::filesystem::exists(folder)) {
+      std::printf("\n(%s missing: skipped)\n", folder.c_str());
+      continue;
+    }
+    accuracy_table(tum_pairs(folder, max_pairs), pcl_pairs);
+  }
+  return 0;
+}
+
+// ---- Google Benchmark timings on one synthetic pair ------------------------------------------------------------
+
+const Pair& bench_pair() {
+  static const Pair pair = std::move(synthetic_pairs(1).pairs.front());
+  return pair;
+}
+
+void BM_BuildFramePyramid(benchmark::State& state) {
+  datasets::SyntheticOptions options;
+  options.frames = 1;
+  datasets::SyntheticSequence seq(options);
+  const datasets::SyntheticFrame f = seq.frame(0);
+  for (auto _ : state) benchmark::DoNotOptimize(build_frame_pyramid(f.depth, &f.color, seq.camera()));
+}
+BENCHMARK(BM_BuildFramePyramid)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Align(benchmark::State& state, const std::string& method, const std::string& backend) {
+  std::unique_ptr<Registration> reg;
+  try {
+    reg = make_registration(method, backend);
+  } catch (const Error& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  const Pair& p = bench_pair();
+  RegistrationResult res;
+  for (auto _ : state) res = reg->align(p.cur, p.ref, SE3());
+  const Errors e = error_of(res.T_ref_cur, p.T_ref_cur_true);
+  state.counters["iterations"] =
+      double(std::accumulate(res.iterations_per_level.begin(), res.iterations_per_level.end(), 0));
+  state.counters["t_err_mm"] = e.t_mm;
+  state.counters["r_err_deg"] = e.r_deg;
+}
+
+// One reduction (one Gauss-Newton iteration's normal equations) at level 0, inputs already on the device.
+ResidualProblem level0_problem(int method) {
+  const Pair& pair = bench_pair();
+  const FramePyramidLevel& c = pair.cur.levels[0];
+  const FramePyramidLevel& r = pair.ref.levels[0];
+  ResidualProblem p;
+  p.camera = hf_intrinsics{float(c.camera.fx), float(c.camera.fy), float(c.camera.cx), float(c.camera.cy),
+                           c.camera.width, c.camera.height};
+  p.cur_vertices = c.vertices.data();
+  p.cur_normals = c.normals.data();
+  p.cur_intensity = c.intensity.data();
+  p.ref_vertices = r.vertices.data();
+  p.ref_normals = r.normals.data();
+  p.ref_intensity = r.intensity.data();
+  p.ref_grad_x = r.grad_x.data();
+  p.ref_grad_y = r.grad_y.data();
+  p.T_ref_cur = to_transform12(pair.T_ref_cur_true);
+  p.params.method = method;
+  p.params.max_dist_m = 0.1f;
+  p.params.min_normal_cos = 0.866f;
+  p.params.icp_weight = 1.0f;
+  p.params.rgb_weight = method == HF_REG_COMBINED ? 0.1f : 1.0f;
+  p.params.robust_icp = HF_ROBUST_HUBER;
+  p.params.scale_icp = 0.01f;
+  p.params.robust_rgb = HF_ROBUST_STUDENT_T;
+  p.params.scale_rgb = 0.05f;
+  p.params.t_dof = 5.0f;
+  p.params.occlusion_check = 1;
+  p.inputs_version = 1;
+  return p;
+}
+
+void run_reduce(benchmark::State& state, ReductionBackend& backend, int method) {
+  const ResidualProblem p = level0_problem(method);
+  NormalEquations ne = backend.reduce(p);  // uploads
+  for (auto _ : state) ne = backend.reduce(p);
+  state.counters["rows"] = double(ne.count);
+}
+
+void BM_Reduce_cpu(benchmark::State& state, int method) {
+  CpuReductionBackend backend;
+  run_reduce(state, backend, method);
+}
+
+#ifdef HF_BENCH_HAVE_OPENCL
+void BM_Reduce_opencl(benchmark::State& state, int method) {
+  opencl::OpenClBackendOptions options;
+  options.pixels_per_item = int(state.range(0));
+  std::unique_ptr<opencl::OpenClReductionBackend> backend;
+  try {
+    backend = std::make_unique<opencl::OpenClReductionBackend>(opencl::Context::shared(), options);
+  } catch (const Error& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  state.counters["work_group"] = double(backend->work_group_size());
+  run_reduce(state, *backend, method);
+}
+#endif
+
+void register_benchmarks() {
+  const std::pair<const char*, int> methods[] = {
+      {"icp", HF_REG_ICP}, {"photometric", HF_REG_PHOTOMETRIC}, {"combined", HF_REG_COMBINED}};
+  for (const auto& [name, id] : methods) {
+    benchmark::RegisterBenchmark((std::string("BM_Reduce/") + name + "/cpu").c_str(), BM_Reduce_cpu, id)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+#ifdef HF_BENCH_HAVE_OPENCL
+    // Argument: pixels per work-item.
+    benchmark::RegisterBenchmark((std::string("BM_Reduce/") + name + "/opencl").c_str(), BM_Reduce_opencl, id)
+        ->Arg(1)
+        ->Arg(4)
+        ->Arg(16)
+        ->Arg(64)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+#endif
+  }
+  for (const std::string& method : registration_names()) {
+    for (const std::string& backend : backend_names()) {
+      benchmark::RegisterBenchmark(("BM_Align/" + method + "/" + backend).c_str(), BM_Align, method, backend)
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()
+          ->MinTime(1.0);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace hf
+
+int main(int argc, char** argv) {
+  bool accuracy = false;
+  int max_pairs = 1000, pcl_pairs = 30;
+  std::vector<char*> rest;
+  for (int i = 0; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--accuracy") == 0) {
+      accuracy = true;
+    } else if (std::strcmp(argv[i], "--max-pairs") == 0 && i + 1 < argc) {
+      max_pairs = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--pcl-pairs") == 0 && i + 1 < argc) {
+      pcl_pairs = std::atoi(argv[++i]);
+    } else {
+      rest.push_back(argv[i]);
+    }
+  }
+  try {
+    if (accuracy) return hf::run_accuracy(max_pairs, pcl_pairs);
+    int n = int(rest.size());
+    hf::register_benchmarks();
+    benchmark::Initialize(&n, rest.data());
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+  } catch (const hf::Error& e) {
+    std::fprintf(stderr, "bench_registration: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,79 @@
+// Raycast and marching-cubes meshing on the room preset (issue 3): a 640x480 raycast at 1 cm and 5 mm voxels
+// after fusing 20 noisy frames, and meshing the whole map. Results in bench/results/fusion.md.
+//   build/release/bench/bench_surface
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+
+#include "datasets/synthetic_sequence.h"
+#include "fusion/integrate.h"
+#include "fusion/mesh.h"
+#include "fusion/raycast.h"
+
+namespace {
+
+using namespace hf;
+using namespace hf::fusion;
+
+struct Scene {
+  std::unique_ptr<datasets::SyntheticSequence> seq;
+  std::unique_ptr<VoxelBlockGrid> grid;
+};
+
+// One fused room per voxel size (built once; frames 0, 4, ..., 76 of the default 640x480 room sequence).
+Scene& room(double voxel_m) {
+  static std::map<double, Scene> cache;
+  Scene& s = cache[voxel_m];
+  if (!s.grid) {
+    datasets::SyntheticOptions o;
+    o.preset = "room";
+    o.frames = 100;
+    s.seq = std::make_unique<datasets::SyntheticSequence>(o);
+    VolumeParams p;
+    p.voxel_m = voxel_m;
+    p.capacity_blocks = 1 << 18;
+    s.grid = std::make_unique<VoxelBlockGrid>(p);
+    for (int i = 0; i < 80; i += 4) {
+      const auto f = s.seq->frame(i);
+      integrate(*s.grid, f.depth, f.color, s.seq->camera(), f.T_world_camera);
+    }
+  }
+  return s;
+}
+
+void BM_Raycast(benchmark::State& state) {
+  const double voxel_m = state.range(0) / 1000.0;
+  Scene& s = room(voxel_m);
+  const SE3 T = s.seq->T_world_camera(82);  // a pose between the fused ones
+  RaycastResult out;
+  RaycastOptions opts;
+  opts.shade = state.range(1) != 0;
+  for (auto _ : state) {
+    raycast(*s.grid, s.seq->camera(), T, opts, &out);
+    benchmark::DoNotOptimize(out.hit_count);
+  }
+  state.counters["hits"] = out.hit_count;
+  state.counters["blocks"] = double(s.grid->block_count());
+}
+BENCHMARK(BM_Raycast)->Args({10, 0})->Args({10, 1})->Args({5, 0})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Mesh(benchmark::State& state) {
+  const double voxel_m = state.range(0) / 1000.0;
+  Scene& s = room(voxel_m);
+  size_t tris = 0, verts = 0;
+  for (auto _ : state) {
+    const TriangleMesh m = extract_mesh(*s.grid);
+    tris = m.triangles.size();
+    verts = m.vertices.size();
+    benchmark::DoNotOptimize(tris);
+  }
+  state.counters["triangles"] = double(tris);
+  state.counters["vertices"] = double(verts);
+  state.counters["blocks"] = double(s.grid->block_count());
+}
+BENCHMARK(BM_Mesh)->Arg(10)->Arg(5)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,243 @@
+#include "fusion/integrate.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <climits>
+#include <cmath>
+#include <limits>
+
+#include "fusion/kernels/integrate_kernels.h"
+
+namespace hf::fusion {
+
+namespace {
+
+static_assert(sizeof(Rgb8) == 3, "colour pixels are packed RGB8");
+
+// Block coordinates packed into 64 bits (21 bits each, +-2^20 blocks: +-10 km at 1 cm voxels) so the per-frame
+// set of touched blocks can be sorted and deduplicated as plain integers.
+constexpr int kCoordBias = 1 << 20;
+std::uint64_t pack(int x, int y, int z) {
+  return (std::uint64_t(x + kCoordBias) << 42) | (std::uint64_t(y + kCoordBias) << 21) | std::uint64_t(z + kCoordBias);
+}
+BlockCoord unpack(std::uint64_t k) {
+  const std::uint64_t m = (1u << 21) - 1;
+  return {int((k >> 42) & m) - kCoordBias, int((k >> 21) & m) - kCoordBias, int(k & m) - kCoordBias};
+}
+bool in_pack_range(double v) { return v > -kCoordBias + 2 && v < kCoordBias - 2; }
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Per-thread list of touched blocks with a small direct-mapped cache: neighbouring pixels mostly cross the same
+// blocks (a 8 cm block spans ~20 pixels at 2 m), so the cache removes most duplicates before the sort.
+struct TouchedList {
+  std::vector<std::uint64_t> keys;
+  std::array<std::uint64_t, 256> cache;
+  TouchedList() { cache.fill(~std::uint64_t(0)); }
+  void add(int x, int y, int z) {
+    const std::uint64_t k = pack(x, y, z);
+    std::uint64_t& slot = cache[(k * 0x9E3779B97F4A7C15ull) >> 56];
+    if (slot == k) return;
+    slot = k;
+    keys.push_back(k);
+  }
+};
+
+// Amanatides-Woo traversal of the unit grid (block units) from a to b, both inside the packable range.
+void traverse(const Eigen::Vector3d& a, const Eigen::Vector3d& b, TouchedList& out) {
+  int cell[3], end[3], step[3];
+  double t_max[3], t_delta[3];
+  const Eigen::Vector3d dir = b - a;
+  for (int i = 0; i < 3; ++i) {
+    cell[i] = int(std::floor(a[i]));
+    end[i] = int(std::floor(b[i]));
+    step[i] = dir[i] > 0 ? 1 : (dir[i] < 0 ? -1 : 0);
+    if (step[i] == 0) {
+      t_max[i] = t_delta[i] = std::numeric_limits<double>::infinity();
+    } else {
+      const double boundary = step[i] > 0 ? cell[i] + 1.0 : double(cell[i]);
+      t_max[i] = (boundary - a[i]) / dir[i];
+      t_delta[i] = 1.0 / std::abs(dir[i]);
+    }
+  }
+  const int max_steps = std::abs(end[0] - cell[0]) + std::abs(end[1] - cell[1]) + std::abs(end[2] - cell[2]) + 1;
+  for (int n = 0; n < max_steps; ++n) {
+    out.add(cell[0], cell[1], cell[2]);
+    const int axis = t_max[0] < t_max[1] ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
+    if (t_max[axis] > 1.0) break;
+    cell[axis] += step[axis];
+    t_max[axis] += t_delta[axis];
+  }
+}
+
+void check_sizes(const DepthImage& depth, const ColorImage& colour, const PinholeCamera& camera) {
+  if (depth.width() != camera.width || depth.height() != camera.height)
+    throw Error("integrate: depth image is " + std::to_string(depth.width()) + "x" + std::to_string(depth.height()) +
+                " but the camera is " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  if (!colour.empty() && (colour.width() != depth.width() || colour.height() != depth.height()))
+    throw Error("integrate: colour image is " + std::to_string(colour.width()) + "x" +
+                std::to_string(colour.height()) + " but the depth image is " + std::to_string(depth.width()) + "x" +
+                std::to_string(depth.height()));
+}
+
+// True when some corner of the block lies in front of the camera and the corners' projections overlap the image.
+bool block_in_view(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw, const Eigen::Vector3d& origin_world,
+                   double block_m, const PinholeCamera& camera) {
+  double u_min = 1e300, u_max = -1e300, v_min = 1e300, v_max = -1e300;
+  bool any_in_front = false;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d p_world =
+        origin_world + block_m * Eigen::Vector3d(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+    const Eigen::Vector3d p = R_cw * p_world + t_cw;
+    if (p.z() <= 1e-6) return true;  // straddles the camera plane: let the per-voxel test decide
+    any_in_front = true;
+    const Eigen::Vector2d px = camera.project(p);
+    u_min = std::min(u_min, px.x());
+    u_max = std::max(u_max, px.x());
+    v_min = std::min(v_min, px.y());
+    v_max = std::max(v_max, px.y());
+  }
+  return any_in_front && u_max >= -0.5 && v_max >= -0.5 && u_min < camera.width - 0.5 && v_min < camera.height - 0.5;
+}
+
+}  // namespace
+
+std::vector<BlockCoord> blocks_touched_by(const VolumeParams& volume, const DepthImage& depth,
+                                          const PinholeCamera& camera, const SE3& T_world_camera,
+                                          const IntegrateParams& params, size_t* pixels_used) {
+  check_sizes(depth, ColorImage(), camera);
+  const double mu = volume.truncation_m();
+  const double inv_block = 1.0 / volume.block_m();
+  const Eigen::Matrix3d R = T_world_camera.rotation();
+  const Eigen::Vector3d t = T_world_camera.translation();
+
+  tbb::enumerable_thread_specific<TouchedList> lists;
+  tbb::combinable<size_t> used([] { return size_t(0); });
+  tbb::parallel_for(tbb::blocked_range<int>(0, depth.height()), [&](const tbb::blocked_range<int>& rows) {
+    TouchedList& list = lists.local();
+    size_t n = 0;
+    for (int v = rows.begin(); v != rows.end(); ++v) {
+      const float* row = depth.data() + size_t(v) * depth.width();
+      // A ray whose band starts and ends in the same blocks as the previous pixel's crosses the same blocks (the
+      // two segments are almost parallel and a fraction of a block apart): skip its traversal.
+      Eigen::Vector3i last_a(INT_MIN, INT_MIN, INT_MIN), last_b(INT_MIN, INT_MIN, INT_MIN);
+      for (int u = 0; u < depth.width(); ++u) {
+        const double d = row[u];
+        if (!(d >= params.min_depth_m && d <= params.max_depth_m)) continue;  // also rejects NaN and inf
+        const Eigen::Vector3d ray((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+        const double z0 = std::max(d - mu, 1e-3);
+        const Eigen::Vector3d a = (R * (ray * z0) + t) * inv_block;
+        const Eigen::Vector3d b = (R * (ray * (d + mu)) + t) * inv_block;
+        bool ok = true;
+        for (int i = 0; i < 3; ++i) ok = ok && in_pack_range(a[i]) && in_pack_range(b[i]);
+        if (!ok) continue;
+        ++n;
+        const Eigen::Vector3i cell_a(int(std::floor(a.x())), int(std::floor(a.y())), int(std::floor(a.z())));
+        const Eigen::Vector3i cell_b(int(std::floor(b.x())), int(std::floor(b.y())), int(std::floor(b.z())));
+        if (cell_a == last_a && cell_b == last_b) continue;
+        last_a = cell_a;
+        last_b = cell_b;
+        traverse(a, b, list);
+      }
+    }
+    used.local() += n;
+  });
+
+  std::vector<std::uint64_t> keys;
+  size_t total = 0;
+  for (const auto& list : lists) total += list.keys.size();
+  keys.reserve(total);
+  for (const auto& list : lists) keys.insert(keys.end(), list.keys.begin(), list.keys.end());
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  std::vector<BlockCoord> coords(keys.size());
+  for (size_t i = 0; i < keys.size(); ++i) coords[i] = unpack(keys[i]);
+  if (pixels_used) *pixels_used = used.combine(std::plus<>());
+  return coords;
+}
+
+IntegrateStats integrate(VoxelBlockGrid& grid, const DepthImage& depth, const ColorImage& colour,
+                         const PinholeCamera& camera, const SE3& T_world_camera, const IntegrateParams& params,
+                         BlockStore* store) {
+  check_sizes(depth, colour, camera);
+  IntegrateStats stats;
+  const VolumeParams& volume = grid.params();
+
+  // Phase 1: allocation along the rays' truncation bands.
+  auto t0 = std::chrono::steady_clock::now();
+  const std::vector<BlockCoord> touched = blocks_touched_by(volume, depth, camera, T_world_camera, params,
+                                                            &stats.pixels_used);
+  std::vector<std::pair<BlockCoord, VoxelBlock*>> visible;
+  visible.reserve(touched.size());
+  for (const BlockCoord& c : touched) {
+    bool created = false;
+    VoxelBlock* block = grid.allocate(c, &created);
+    if (created) {
+      ++stats.blocks_allocated;
+      if (store && store->take(c, block)) ++stats.blocks_streamed_in;
+    }
+    visible.emplace_back(c, block);
+  }
+  stats.allocate_ms = ms_since(t0);
+
+  // Phase 2: per-voxel update, parallel over blocks.
+  t0 = std::chrono::steady_clock::now();
+  const SE3 T_camera_world = T_world_camera.inverse();
+  const Eigen::Matrix3d R_cw = T_camera_world.rotation();
+  const Eigen::Vector3d t_cw = T_camera_world.translation();
+  const double voxel_m = volume.voxel_m;
+  const Eigen::Vector3f step_x = (R_cw.col(0) * voxel_m).cast<float>();
+  const Eigen::Vector3f step_y = (R_cw.col(1) * voxel_m).cast<float>();
+  const Eigen::Vector3f step_z = (R_cw.col(2) * voxel_m).cast<float>();
+  const hf_intrinsics K = camera.kernel_intrinsics();
+  const float mu = float(volume.truncation_m());
+  const float max_weight = volume.max_weight;
+  const float w = params.observation_weight;
+  const float* depth_px = depth.data();
+  const hf_uint8* rgb = colour.empty() ? nullptr : reinterpret_cast<const hf_uint8*>(colour.data());
+
+  tbb::combinable<size_t> updated([] { return size_t(0); });
+  tbb::combinable<size_t> in_view([] { return size_t(0); });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, visible.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    size_t n_updated = 0, n_view = 0;
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const BlockCoord& c = visible[i].first;
+      Voxel* voxels = visible[i].second->voxels.data();
+      const Eigen::Vector3d origin_world = Eigen::Vector3d(c.x, c.y, c.z) * volume.block_m();
+      if (!block_in_view(R_cw, t_cw, origin_world, volume.block_m(), camera)) continue;
+      ++n_view;
+      // Centre of voxel (0, 0, 0) in the camera frame; the others follow by adding the voxel steps.
+      const Eigen::Vector3f p0 =
+          (R_cw * (origin_world + Eigen::Vector3d::Constant(0.5 * voxel_m)) + t_cw).cast<float>();
+      for (int z = 0; z < HF_BLOCK_SIZE; ++z) {
+        const Eigen::Vector3f pz = p0 + float(z) * step_z;
+        for (int y = 0; y < HF_BLOCK_SIZE; ++y) {
+          Eigen::Vector3f p = pz + float(y) * step_y;
+          Voxel* row = voxels + hf_voxel_index(0, y, z);
+          for (int x = 0; x < HF_BLOCK_SIZE; ++x, p += step_x) {
+            n_updated += hf_integrate_voxel(row + x, hf_make_float4(p.x(), p.y(), p.z(), 1.0f), depth_px, rgb, K, mu,
+                                            max_weight, w);
+          }
+        }
+      }
+    }
+    updated.local() += n_updated;
+    in_view.local() += n_view;
+  });
+  stats.update_ms = ms_since(t0);
+  stats.voxels_updated = updated.combine(std::plus<>());
+  stats.blocks_visible = in_view.combine(std::plus<>());
+  stats.blocks_total = grid.block_count();
+  stats.memory_bytes = grid.memory_bytes();
+  return stats;
+}
+
+}  // namespace hf::fusion

@@ -1,0 +1,1 @@
+list(APPEND HF_FUSION_SOURCES raycast.cpp mesh.cpp)

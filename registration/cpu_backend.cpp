@@ -1,0 +1,42 @@
+#include "registration/cpu_backend.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
+#include "core/error.h"
+#include "registration/kernels/residuals.h"
+
+namespace hf {
+
+CpuReductionBackend::CpuReductionBackend(int rows_per_chunk) : rows_per_chunk_(std::max(1, rows_per_chunk)) {}
+
+NormalEquations CpuReductionBackend::reduce(const ResidualProblem& problem) {
+  validate_problem(problem);
+  const int height = problem.height(), width = problem.width();
+  const int chunks = (height + rows_per_chunk_ - 1) / rows_per_chunk_;
+  chunk_sums_.assign(size_t(chunks) * HF_REG_SUMS, 0.0);
+  const ResidualProblem& p = problem;
+  tbb::parallel_for(tbb::blocked_range<int>(0, chunks), [&](const tbb::blocked_range<int>& range) {
+    for (int c = range.begin(); c != range.end(); ++c) {
+      double* sums = chunk_sums_.data() + size_t(c) * HF_REG_SUMS;
+      const int y0 = c * rows_per_chunk_, y1 = std::min(height, y0 + rows_per_chunk_);
+      for (int y = y0; y < y1; ++y) {
+        for (int x = 0; x < width; ++x) {
+          hf_reg_accumulate_pixel(x, y, p.cur_vertices, p.cur_normals, p.cur_intensity, p.ref_vertices,
+                                  p.ref_normals, p.ref_intensity, p.ref_grad_x, p.ref_grad_y, p.camera,
+                                  p.T_ref_cur, p.params, sums);
+        }
+      }
+    }
+  });
+  double total[HF_REG_SUMS] = {};
+  for (int c = 0; c < chunks; ++c) {
+    const double* sums = chunk_sums_.data() + size_t(c) * HF_REG_SUMS;
+    for (int k = 0; k < HF_REG_SUMS; ++k) total[k] += sums[k];
+  }
+  return NormalEquations::from_sums(total);
+}
+
+}  // namespace hf

@@ -1,0 +1,54 @@
+// The per-level maps registration works on, built once per frame and shared by every method.
+//
+//   hf::FramePyramid cur = hf::build_frame_pyramid(depth, color, camera);       // from a sensor frame
+//   hf::FramePyramid ref = hf::build_model_pyramid(vertices, normals, &intensity, camera);  // raycast maps
+//
+// Level 0 is full resolution; level l has camera.scaled(l) and half the size of level l-1 (core/pyramid.h).
+// Frames: vertices and normals in the frame's own camera frame (x right, y down, z forward, metres).
+#pragma once
+
+#include <vector>
+
+#include "core/camera.h"
+#include "core/image.h"
+
+namespace hf {
+
+struct FramePyramidLevel {
+  PinholeCamera camera;   // camera.scaled(level)
+  VertexMap vertices;     // w = 1 valid
+  NormalMap normals;      // unit, towards the camera, w = 1 valid
+  IntensityImage intensity;  // [0, 1]; empty when the frame had no colour
+  Image<float> grad_x, grad_y;  // of intensity (Sobel / 8, intensity units per pixel); empty without colour
+  int width() const { return camera.width; }
+  int height() const { return camera.height; }
+  bool has_intensity() const { return !intensity.empty(); }
+};
+
+struct FramePyramid {
+  std::vector<FramePyramidLevel> levels;  // [0] finest
+  int num_levels() const { return int(levels.size()); }
+  bool has_intensity() const { return !levels.empty() && levels[0].has_intensity(); }
+};
+
+struct FramePyramidOptions {
+  int levels = 3;                  // KinectFusion: 3
+  bool bilateral_filter = true;    // KinectFusion eq. 2 on level 0 depth before the vertex/normal maps
+  float max_depth_m = 0.0f;        // depths beyond this are dropped (0 = keep all)
+  float min_depth_m = 0.0f;        // depths below this are dropped
+};
+
+// From a depth image (metres, 0/NaN invalid) and an optional colour image of the same size (nullptr: no
+// intensity, so only geometric methods can use the pyramid). Never throws for bad depth values (all-NaN depth
+// gives empty maps); throws hf::Error when the sizes disagree with the camera, the image is too small for the
+// requested levels, or levels < 1.
+FramePyramid build_frame_pyramid(const DepthImage& depth, const ColorImage* color, const PinholeCamera& camera,
+                                 const FramePyramidOptions& options = {});
+
+// From model maps (e.g. a raycast; camera frame of the raycast camera) and an optional intensity image. Level 0
+// uses the maps as given; coarser levels re-derive vertices and normals from the depth-aware pyramid of the
+// vertices' z. Same errors as build_frame_pyramid.
+FramePyramid build_model_pyramid(const VertexMap& vertices, const NormalMap& normals,
+                                 const IntensityImage* intensity, const PinholeCamera& camera, int levels = 3);
+
+}  // namespace hf

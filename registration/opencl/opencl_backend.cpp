@@ -1,0 +1,170 @@
+#include "registration/opencl/opencl_backend.h"
+
+#include <algorithm>
+#include <cstring>
+#include <utility>
+
+#include "core/error.h"
+
+namespace hf {
+
+std::unique_ptr<ReductionBackend> make_opencl_backend() {
+  return std::make_unique<opencl::OpenClReductionBackend>();
+}
+
+namespace opencl {
+namespace {
+
+// Argument indices of hf_reg_reduce (registration.cl).
+constexpr int kArgFirstMap = 0;  // 8 maps: cur v, n, I; ref v, n, I, gx, gy
+constexpr int kArgIntrinsics = 8;
+constexpr int kArgTransform = 9;
+constexpr int kArgParams = 10;
+constexpr int kArgGroupSums = 11;
+constexpr int kArgScratch = 12;
+
+// hf_reg_reduce_rows: rows, n, group_sums, scratch.
+constexpr int kRowsArgScratch = 3;
+// run_groups() binds the group-sums buffer just before the scratch argument.
+static_assert(kArgGroupSums == kArgScratch - 1, "group_sums must precede scratch");
+
+static_assert(sizeof(hf_reg_row) == 8 * sizeof(float), "hf_reg_row must be J[6], r, w");
+static_assert(sizeof(hf_float4) == 16, "hf_float4 must match OpenCL float4");
+
+}  // namespace
+
+OpenClReductionBackend::OpenClReductionBackend(std::shared_ptr<Context> context, const OpenClBackendOptions& options)
+    : context_(std::move(context)), options_(options) {
+  if (!context_) throw Error("OpenCL backend: no context");
+  options_.pixels_per_item = std::max(1, options_.pixels_per_item);
+  use_double_ = options_.allow_double && context_->info().has_fp64;
+  try {
+    // Correctly rounded division and square root, as in C++, for the same accept/reject decisions per pixel.
+    std::string build_options = "-cl-fp32-correctly-rounded-divide-sqrt";
+    if (use_double_) build_options += " -DHF_REG_REDUCE_DOUBLE=1";
+    cl::Program program =
+        context_->program(use_double_ ? "registration-double" : "registration-float", registration_program_source(),
+                          build_options);
+    reduce_kernel_ = cl::Kernel(program, "hf_reg_reduce");
+    rows_kernel_ = cl::Kernel(program, "hf_reg_reduce_rows");
+    queue_ = cl::CommandQueue(context_->context(), context_->device());
+    const std::size_t bytes_per_item = HF_REG_SUMS * (use_double_ ? sizeof(double) : sizeof(float));
+    work_group_size_ = std::min(context_->work_group_size(reduce_kernel_, bytes_per_item, options_.max_work_group_size),
+                                context_->work_group_size(rows_kernel_, bytes_per_item, options_.max_work_group_size));
+    dummy_ = cl::Buffer(context_->context(), CL_MEM_READ_ONLY, sizeof(hf_float4));
+  } catch (const Error&) {
+    throw;
+  } catch (...) {
+    rethrow_as_hf_error("OpenCL backend on " + context_->info().describe());
+  }
+}
+
+cl::Buffer& OpenClReductionBackend::slot_buffer(int slot, const void* data, std::size_t bytes) {
+  Slot& s = slots_[slot];
+  if (s.capacity < bytes) {
+    s.buffer = cl::Buffer(context_->context(), CL_MEM_READ_ONLY, bytes);
+    s.capacity = bytes;
+  }
+  // Non-blocking: the in-order queue runs the kernel after the copy, and the caller's maps must stay alive and
+  // unchanged until reduce() returns (it waits for the result), which the ResidualProblem contract guarantees.
+  queue_.enqueueWriteBuffer(s.buffer, CL_FALSE, 0, bytes, data);
+  s.source = data;
+  s.bytes = bytes;
+  return s.buffer;
+}
+
+void OpenClReductionBackend::upload_inputs(const ResidualProblem& p) {
+  const std::size_t n = std::size_t(p.width()) * std::size_t(p.height());
+  const void* maps[8] = {p.cur_vertices, p.cur_normals, p.cur_intensity, p.ref_vertices,
+                         p.ref_normals,  p.ref_intensity, p.ref_grad_x, p.ref_grad_y};
+  const std::size_t elem[8] = {sizeof(hf_float4), sizeof(hf_float4), sizeof(float), sizeof(hf_float4),
+                               sizeof(hf_float4), sizeof(float),     sizeof(float), sizeof(float)};
+  bool same = have_inputs_ && inputs_version_ == p.inputs_version && width_ == p.width() && height_ == p.height();
+  for (int i = 0; i < 8 && same; ++i) same = slots_[i].source == maps[i];
+  if (same) return;
+  for (int i = 0; i < 8; ++i) {
+    if (maps[i] == nullptr) {
+      slots_[i].source = nullptr;
+      slots_[i].bytes = 0;
+      reduce_kernel_.setArg(kArgFirstMap + i, dummy_);
+    } else {
+      reduce_kernel_.setArg(kArgFirstMap + i, slot_buffer(i, maps[i], n * elem[i]));
+    }
+  }
+  have_inputs_ = true;
+  inputs_version_ = p.inputs_version;
+  width_ = p.width();
+  height_ = p.height();
+  ++uploads_;
+}
+
+std::vector<double> OpenClReductionBackend::run_groups(cl::Kernel& kernel, std::size_t items, int first_local_arg) {
+  const std::size_t ls = work_group_size_;
+  const std::size_t per_group = ls * std::size_t(options_.pixels_per_item);
+  const std::size_t groups = std::max<std::size_t>(1, (items + per_group - 1) / per_group);
+  const std::size_t acc = use_double_ ? sizeof(double) : sizeof(float);
+  const std::size_t bytes = groups * HF_REG_SUMS * acc;
+  if (group_sums_capacity_ < bytes) {
+    group_sums_ = cl::Buffer(context_->context(), CL_MEM_WRITE_ONLY, bytes);
+    group_sums_capacity_ = bytes;
+  }
+  kernel.setArg(first_local_arg - 1, group_sums_);
+  kernel.setArg(first_local_arg, cl::Local(HF_REG_SUMS * ls * acc));
+  queue_.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(groups * ls), cl::NDRange(ls));
+  host_group_sums_.resize(bytes);
+  queue_.enqueueReadBuffer(group_sums_, CL_TRUE, 0, bytes, host_group_sums_.data());
+  // Stage two: the group rows in group order, in double (deterministic for a given device and group size).
+  std::vector<double> total(HF_REG_SUMS, 0.0);
+  for (std::size_t g = 0; g < groups; ++g) {
+    for (int k = 0; k < HF_REG_SUMS; ++k) {
+      const std::size_t at = (g * HF_REG_SUMS + std::size_t(k)) * acc;
+      if (use_double_) {
+        double v;
+        std::memcpy(&v, host_group_sums_.data() + at, sizeof v);
+        total[k] += v;
+      } else {
+        float v;
+        std::memcpy(&v, host_group_sums_.data() + at, sizeof v);
+        total[k] += double(v);
+      }
+    }
+  }
+  return total;
+}
+
+NormalEquations OpenClReductionBackend::reduce(const ResidualProblem& problem) {
+  validate_problem(problem);
+  try {
+    upload_inputs(problem);
+    reduce_kernel_.setArg(kArgIntrinsics, sizeof(hf_intrinsics), &problem.camera);
+    reduce_kernel_.setArg(kArgTransform, sizeof(hf_transform12), &problem.T_ref_cur);
+    reduce_kernel_.setArg(kArgParams, sizeof(hf_reg_params), &problem.params);
+    const std::size_t pixels = std::size_t(problem.width()) * std::size_t(problem.height());
+    const std::vector<double> sums = run_groups(reduce_kernel_, pixels, kArgScratch);
+    return NormalEquations::from_sums(sums.data());
+  } catch (const Error&) {
+    throw;
+  } catch (...) {
+    // A failed enqueue may have left the buffers half-written: upload again next time.
+    have_inputs_ = false;
+    rethrow_as_hf_error("OpenCL backend");
+  }
+}
+
+std::vector<double> OpenClReductionBackend::reduce_rows(const std::vector<hf_reg_row>& rows) {
+  try {
+    const std::size_t bytes = std::max<std::size_t>(rows.size(), 1) * sizeof(hf_reg_row);
+    cl::Buffer buffer(context_->context(), CL_MEM_READ_ONLY, bytes);
+    if (!rows.empty()) queue_.enqueueWriteBuffer(buffer, CL_FALSE, 0, rows.size() * sizeof(hf_reg_row), rows.data());
+    rows_kernel_.setArg(0, buffer);
+    rows_kernel_.setArg(1, cl_int(rows.size()));
+    return run_groups(rows_kernel_, rows.size(), kRowsArgScratch);
+  } catch (const Error&) {
+    throw;
+  } catch (...) {
+    rethrow_as_hf_error("OpenCL backend (reduce_rows)");
+  }
+}
+
+}  // namespace opencl
+}  // namespace hf

@@ -1,0 +1,94 @@
+#include "registration/reduction.h"
+
+#include <algorithm>
+
+#include "core/error.h"
+#include "registration/cpu_backend.h"
+
+#ifdef HF_HAVE_OPENCL_BACKEND
+#include "registration/opencl/opencl_backend.h"
+#endif
+
+namespace hf {
+
+NormalEquations NormalEquations::from_sums(const double* sums) {
+  NormalEquations ne;
+  int k = HF_REG_SUM_H;
+  for (int i = 0; i < 6; ++i) {
+    for (int j = i; j < 6; ++j) {
+      ne.JtJ(i, j) = sums[k];
+      ne.JtJ(j, i) = sums[k];
+      ++k;
+    }
+  }
+  for (int i = 0; i < 6; ++i) ne.Jtr(i) = sums[HF_REG_SUM_G + i];
+  ne.cost = sums[HF_REG_SUM_COST];
+  ne.count = long(sums[HF_REG_SUM_COUNT] + 0.5);
+  return ne;
+}
+
+std::vector<double> NormalEquations::to_sums() const {
+  std::vector<double> sums(HF_REG_SUMS, 0.0);
+  int k = HF_REG_SUM_H;
+  for (int i = 0; i < 6; ++i) {
+    for (int j = i; j < 6; ++j) sums[k++] = JtJ(i, j);
+  }
+  for (int i = 0; i < 6; ++i) sums[HF_REG_SUM_G + i] = Jtr(i);
+  sums[HF_REG_SUM_COST] = cost;
+  sums[HF_REG_SUM_COUNT] = double(count);
+  return sums;
+}
+
+hf_transform12 to_transform12(const SE3& T) {
+  hf_transform12 out{};
+  const Eigen::Matrix3d R = T.rotation();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out.m[r * 3 + c] = float(R(r, c));
+  }
+  for (int i = 0; i < 3; ++i) out.m[9 + i] = float(T.translation()(i));
+  return out;
+}
+
+void validate_problem(const ResidualProblem& problem) {
+  if (problem.camera.width <= 0 || problem.camera.height <= 0) {
+    throw Error("registration problem: image size " + std::to_string(problem.camera.width) + "x" +
+                std::to_string(problem.camera.height) + " is not positive");
+  }
+  const int m = problem.params.method;
+  if (m != HF_REG_ICP && m != HF_REG_PHOTOMETRIC && m != HF_REG_COMBINED) {
+    throw Error("registration problem: unknown method id " + std::to_string(m));
+  }
+  const bool geometric = m != HF_REG_PHOTOMETRIC, photometric = m != HF_REG_ICP;
+  auto need = [](const void* ptr, const char* what) {
+    if (ptr == nullptr) throw Error(std::string("registration problem: ") + what + " is missing");
+  };
+  need(problem.cur_vertices, "cur_vertices");
+  if (geometric) {
+    need(problem.cur_normals, "cur_normals");
+    need(problem.ref_vertices, "ref_vertices");
+    need(problem.ref_normals, "ref_normals");
+  }
+  if (photometric) {
+    need(problem.cur_intensity, "cur_intensity");
+    need(problem.ref_intensity, "ref_intensity");
+    need(problem.ref_grad_x, "ref_grad_x");
+    need(problem.ref_grad_y, "ref_grad_y");
+    if (problem.params.occlusion_check) need(problem.ref_vertices, "ref_vertices");
+  }
+}
+
+std::vector<std::string> backend_names() { return {"cpu", "opencl"}; }
+
+std::unique_ptr<ReductionBackend> make_backend(const std::string& name) {
+  if (name == "cpu") return std::make_unique<CpuReductionBackend>();
+  if (name == "opencl") {
+#ifdef HF_HAVE_OPENCL_BACKEND
+    return make_opencl_backend();
+#else
+    throw Error("OpenCL backend not built (hashfusion was configured without OpenCL); use --backend cpu");
+#endif
+  }
+  throw Error("unknown reduction backend '" + name + "' (known: cpu, opencl)");
+}
+
+}  // namespace hf

@@ -1,0 +1,337 @@
+#include "fusion/integrate.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "datasets/presets.h"
+#include "datasets/synthetic_sequence.h"
+#include "fusion/kernels/integrate_kernels.h"
+#include "fusion/volume_io.h"
+#include "tests/fusion/analytic_depth.h"
+
+namespace hf::fusion {
+namespace {
+
+using testing::render_plane_depth;
+using testing::render_sphere_depth;
+
+PinholeCamera small_camera() { return PinholeCamera::preset("ros").scaled(2); }  // 160x120
+
+VolumeParams params_1cm(size_t capacity = 1 << 15) {
+  VolumeParams p;
+  p.voxel_m = 0.01;
+  p.truncation_vox = 4.0;
+  p.capacity_blocks = capacity;
+  return p;
+}
+
+Eigen::Vector3d voxel_centre(const VolumeParams& p, const BlockCoord& c, int x, int y, int z) {
+  return (Eigen::Vector3d(HF_BLOCK_SIZE * c.x + x, HF_BLOCK_SIZE * c.y + y, HF_BLOCK_SIZE * c.z + z) +
+          Eigen::Vector3d::Constant(0.5)) *
+         p.voxel_m;
+}
+
+// A fronto-parallel plane: the projective distance d - z equals the true signed distance, so every observed voxel
+// must hold min(1, sdf / mu) up to the int16 step (and float rounding of the depth and the voxel position).
+TEST(Integrate, FrontoParallelPlaneGivesAnalyticSdf) {
+  const PinholeCamera camera = small_camera();
+  const VolumeParams volume = params_1cm();
+  VoxelBlockGrid grid(volume);
+  const double plane_z = 1.2345;
+  const SE3 T_world_camera = SE3::identity();
+  const DepthImage depth = render_plane_depth(camera, T_world_camera, Eigen::Vector3d::UnitZ(), plane_z);
+  const IntegrateStats stats = integrate(grid, depth, ColorImage(), camera, T_world_camera);
+  EXPECT_GT(stats.blocks_allocated, 100u);
+  EXPECT_EQ(stats.blocks_allocated, grid.block_count());
+  EXPECT_GT(stats.voxels_updated, 0u);
+  const double mu = volume.truncation_m();
+  size_t checked = 0;
+  double max_err = 0.0;
+  for (const auto& [c, block] : grid.blocks()) {
+    // Free space is never allocated: every block lies within the band |z - plane_z| <= mu (plus a block).
+    const double block_z0 = c.z * volume.block_m();
+    EXPECT_LE(block_z0, plane_z + mu);
+    EXPECT_GE(block_z0 + volume.block_m(), plane_z - mu);
+    for (int z = 0; z < 8; ++z)
+      for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) {
+          const Voxel& v = block->voxels[hf_voxel_index(x, y, z)];
+          if (v.weight == 0) continue;
+          const double expected = std::min(1.0, (plane_z - voxel_centre(volume, c, x, y, z).z()) / mu);
+          ASSERT_GE(expected, -1.0 - 1e-6);
+          max_err = std::max(max_err, std::abs(hf_voxel_sdf(v) - expected));
+          EXPECT_EQ(hf_voxel_weight(v), 1.0f);
+          ++checked;
+        }
+  }
+  EXPECT_GT(checked, 10000u);
+  // Bound: half an int16 step (1.5e-5) + float depth (1e-7 m) and float voxel positions (1e-7 m) over mu = 4 cm.
+  EXPECT_LT(max_err, 0.5 / HF_SDF_SCALE + 2e-5) << "max error " << max_err;
+}
+
+// A tilted plane seen from an offset, rotated camera: each observed voxel holds the projective TSDF
+// min(1, (d(u) - z) / mu) with u the nearest pixel of the voxel centre and d(u) the exact ray-plane depth, and
+// the sign of the stored value agrees with the true signed distance away from the surface.
+TEST(Integrate, TiltedPlaneMatchesProjectiveTsdf) {
+  const PinholeCamera camera = small_camera();
+  const VolumeParams volume = params_1cm();
+  VoxelBlockGrid grid(volume);
+  const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.2, -1.0).normalized();  // facing the camera
+  const double offset = n.dot(Eigen::Vector3d(0.1, 0.0, 1.5));
+  const SE3 T_world_camera(Eigen::Matrix3d(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY())),
+                           Eigen::Vector3d(0.05, -0.03, 0.0));
+  const DepthImage depth = render_plane_depth(camera, T_world_camera, n, offset);
+  integrate(grid, depth, ColorImage(), camera, T_world_camera);
+  const SE3 T_camera_world = T_world_camera.inverse();
+  const double mu = volume.truncation_m();
+  size_t checked = 0;
+  for (const auto& [c, block] : grid.blocks()) {
+    for (int z = 0; z < 8; ++z)
+      for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) {
+          const Voxel& v = block->voxels[hf_voxel_index(x, y, z)];
+          if (v.weight == 0) continue;
+          const Eigen::Vector3d p_world = voxel_centre(volume, c, x, y, z);
+          const Eigen::Vector3d p = T_camera_world * p_world;
+          const Eigen::Vector2d px = camera.project(p);
+          const double fu = px.x() + 0.5 - std::floor(px.x() + 0.5), fv = px.y() + 0.5 - std::floor(px.y() + 0.5);
+          // Skip voxels whose projection is within float rounding of a pixel border (either pixel is right).
+          if (fu < 1e-3 || fu > 1 - 1e-3 || fv < 1e-3 || fv > 1 - 1e-3) continue;
+          const int u = int(std::floor(px.x() + 0.5)), w = int(std::floor(px.y() + 0.5));
+          const double d = depth(u, w);
+          const double expected = std::min(1.0, (d - p.z()) / mu);
+          EXPECT_NEAR(hf_voxel_sdf(v), expected, 0.5 / HF_SDF_SCALE + 5e-5);
+          const double true_sdf = n.dot(p_world) - offset;  // positive on the camera side
+          if (std::abs(true_sdf) > 0.5 * volume.voxel_m) {
+            EXPECT_EQ(hf_voxel_sdf(v) > 0, true_sdf > 0);
+          }
+          ++checked;
+        }
+  }
+  EXPECT_GT(checked, 10000u);
+}
+
+// The 8-byte voxel against a float reference computing the same update on sample voxels through 12 noisy frames
+// of the sphere preset: the SDF stays within (n + 1) / 4 int16 steps (each update rounds by at most half a step
+// and the running average shrinks earlier errors), the weight is exact, the colour within (n + 1) / 4 + 1 levels.
+TEST(Integrate, QuantisationCostsNoAccuracyAgainstFloatReference) {
+  datasets::SyntheticOptions options;
+  options.preset = "sphere";
+  options.frames = 12;
+  options.camera = small_camera();
+  const datasets::SyntheticSequence seq(options);
+  const VolumeParams volume = params_1cm();
+  VoxelBlockGrid grid(volume);
+  const float mu = float(volume.truncation_m());
+
+  struct Reference {
+    int i, j, k;
+    double D = 0, W = 0, r = 0, g = 0, b = 0;
+    bool has_colour = false;
+    bool ambiguous = false;
+  };
+  std::vector<Reference> refs;
+  for (int f = 0; f < seq.size(); ++f) {
+    const datasets::SyntheticFrame frame = seq.frame(f);
+    integrate(grid, frame.depth, frame.color, seq.camera(), frame.T_world_camera);
+    if (f == 0) {  // sample voxels near the surface seen by the first frame
+      for (const auto& [c, block] : grid.blocks()) {
+        for (int idx = 0; idx < HF_VOXELS_PER_BLOCK; idx += 37) {
+          if (block->voxels[idx].weight == 0 || refs.size() >= 400) continue;
+          const int x = idx % 8, y = (idx / 8) % 8, z = idx / 64;
+          refs.push_back({8 * c.x + x, 8 * c.y + y, 8 * c.z + z});
+        }
+      }
+      ASSERT_GT(refs.size(), 100u);
+    }
+    const SE3 T_camera_world = frame.T_world_camera.inverse();
+    for (Reference& ref : refs) {
+      const Eigen::Vector3d p = T_camera_world * ((Eigen::Vector3d(ref.i, ref.j, ref.k) + Eigen::Vector3d::Constant(0.5)) *
+                                                  volume.voxel_m);
+      if (p.z() <= 0) continue;
+      const Eigen::Vector2d px = seq.camera().project(p) + Eigen::Vector2d(0.5, 0.5);
+      const double fu = px.x() - std::floor(px.x()), fv = px.y() - std::floor(px.y());
+      if (fu < 1e-3 || fu > 1 - 1e-3 || fv < 1e-3 || fv > 1 - 1e-3) ref.ambiguous = true;
+      if (!(px.x() >= 0 && px.y() >= 0 && px.x() < seq.camera().width && px.y() < seq.camera().height)) continue;
+      const int u = int(px.x()), v = int(px.y());
+      const double d = frame.depth(u, v);
+      if (!(d > 0)) continue;
+      const double eta = d - p.z();
+      if (eta < -mu) continue;
+      if (std::abs(eta + mu) < 1e-5 || std::abs(eta - mu) < 1e-5) ref.ambiguous = true;
+      const double tsdf = std::min(1.0, eta / mu);
+      if (eta < mu) {  // colour shares the SDF weight once it has a sample
+        const Rgb8 col = frame.color(u, v);
+        const double Wc = ref.has_colour ? ref.W : 0.0;
+        ref.r = (ref.r * Wc + col.r) / (Wc + 1);
+        ref.g = (ref.g * Wc + col.g) / (Wc + 1);
+        ref.b = (ref.b * Wc + col.b) / (Wc + 1);
+        ref.has_colour = true;
+      }
+      ref.D = (ref.D * ref.W + tsdf) / (ref.W + 1);
+      ref.W += 1;
+    }
+  }
+  const double n = seq.size();
+  size_t compared = 0;
+  double max_steps = 0;
+  for (const Reference& ref : refs) {
+    if (ref.ambiguous) continue;
+    const Voxel* v = grid.voxel(ref.i, ref.j, ref.k);
+    ASSERT_NE(v, nullptr);
+    EXPECT_EQ(hf_voxel_weight(*v), ref.W);
+    const double steps = std::abs(hf_voxel_sdf(*v) - ref.D) * HF_SDF_SCALE;
+    max_steps = std::max(max_steps, steps);
+    EXPECT_LE(steps, (n + 1) / 4 + 0.1);
+    if (ref.has_colour) {
+      EXPECT_NEAR(v->r, ref.r, (n + 1) / 4 + 1);
+      EXPECT_NEAR(v->g, ref.g, (n + 1) / 4 + 1);
+      EXPECT_NEAR(v->b, ref.b, (n + 1) / 4 + 1);
+    }
+    ++compared;
+  }
+  EXPECT_GT(compared, 100u);
+  // In metres the worst SDF difference is steps * mu / 32767: micrometres, against millimetres of sensor noise.
+  EXPECT_LT(max_steps * volume.truncation_m() / HF_SDF_SCALE, 1e-5);
+}
+
+// Blocks follow surface area, not volume: a sphere of twice the radius seen from twice the distance (the same
+// images up to scale) needs ~4x the blocks, far from the 8x of its bounding volume.
+TEST(Integrate, MemoryGrowsWithSurfaceArea) {
+  const PinholeCamera camera = small_camera();
+  auto blocks_for = [&](double radius) {
+    VoxelBlockGrid grid(params_1cm());
+    std::vector<SE3> poses = datasets::hemisphere_poses(Eigen::Vector3d::Zero(), 3 * radius, 8);
+    for (const SE3& T : datasets::ring_poses(Eigen::Vector3d::Zero(), 3 * radius, 4, -0.6)) poses.push_back(T);
+    for (const SE3& T : poses)
+      integrate(grid, render_sphere_depth(camera, T, Eigen::Vector3d::Zero(), radius), ColorImage(), camera, T);
+    return double(grid.block_count());
+  };
+  const double small = blocks_for(0.4), large = blocks_for(0.8);
+  const double ratio = large / small;
+  EXPECT_GT(small, 200);
+  EXPECT_GT(ratio, 3.0) << small << " -> " << large;
+  EXPECT_LT(ratio, 5.0) << small << " -> " << large;
+}
+
+TEST(Integrate, InvalidDepthNeverAllocates) {
+  const PinholeCamera camera = small_camera();
+  VoxelBlockGrid grid(params_1cm());
+  DepthImage depth(camera.width, camera.height, 0.0f);
+  for (int v = 0; v < camera.height; ++v)
+    for (int u = 0; u < camera.width; ++u) {
+      const int kind = (u + v) % 5;
+      depth(u, v) = kind == 0   ? std::numeric_limits<float>::quiet_NaN()
+                    : kind == 1 ? std::numeric_limits<float>::infinity()
+                    : kind == 2 ? -std::numeric_limits<float>::infinity()
+                    : kind == 3 ? -1.0f
+                                : 0.0f;
+    }
+  IntegrateStats stats = integrate(grid, depth, ColorImage(), camera, SE3::identity());
+  EXPECT_EQ(grid.block_count(), 0u);
+  EXPECT_EQ(stats.pixels_used, 0u);
+  EXPECT_EQ(stats.voxels_updated, 0u);
+  // Out of range (too near / too far) allocates nothing either.
+  IntegrateParams params;
+  depth = DepthImage(camera.width, camera.height, 0.05f);
+  integrate(grid, depth, ColorImage(), camera, SE3::identity(), params);
+  depth = DepthImage(camera.width, camera.height, 20.0f);
+  integrate(grid, depth, ColorImage(), camera, SE3::identity(), params);
+  EXPECT_EQ(grid.block_count(), 0u);
+  // One valid pixel allocates only the blocks its band [d - mu, d + mu] crosses: at most 2 mu / block + 3.
+  depth = DepthImage(camera.width, camera.height, 0.0f);
+  depth(40, 30) = 1.5f;
+  stats = integrate(grid, depth, ColorImage(), camera, SE3::identity());
+  EXPECT_EQ(stats.pixels_used, 1u);
+  EXPECT_GE(grid.block_count(), 1u);
+  EXPECT_LE(grid.block_count(), 4u);
+  for (const BlockCoord& c : grid.block_coords()) {
+    const double z0 = c.z * grid.params().block_m();
+    EXPECT_LE(z0, 1.5 + grid.params().truncation_m());
+    EXPECT_GE(z0 + grid.params().block_m(), 1.5 - grid.params().truncation_m());
+  }
+}
+
+TEST(Integrate, WeightCapAndColourAverage) {
+  const PinholeCamera camera = small_camera();
+  VolumeParams volume = params_1cm();
+  volume.max_weight = 5.0f;
+  VoxelBlockGrid grid(volume);
+  const DepthImage depth = render_plane_depth(camera, SE3::identity(), Eigen::Vector3d::UnitZ(), 1.0);
+  ColorImage red(camera.width, camera.height, Rgb8{200, 10, 30});
+  ColorImage blue(camera.width, camera.height, Rgb8{0, 0, 250});
+  for (int i = 0; i < 4; ++i) integrate(grid, depth, red, camera, SE3::identity());
+  integrate(grid, depth, blue, camera, SE3::identity());
+  size_t surface = 0;
+  for (const auto& [c, block] : grid.blocks())
+    for (const Voxel& v : block->voxels) {
+      if (v.weight == 0) continue;
+      EXPECT_EQ(hf_voxel_weight(v), 5.0f);
+      if (std::abs(hf_voxel_sdf(v)) < 0.99f) {  // inside the band: colour is (4 red + 1 blue) / 5
+        EXPECT_EQ(v.flags & HF_VOXEL_FLAG_COLOUR, HF_VOXEL_FLAG_COLOUR);
+        EXPECT_EQ(v.r, 160);
+        EXPECT_EQ(v.g, 8);
+        EXPECT_EQ(v.b, 74);
+        ++surface;
+      }
+    }
+  EXPECT_GT(surface, 1000u);
+  // Past the cap the weight stays at max_weight and the new observation counts 1 / (W_max + 1).
+  for (int i = 0; i < 3; ++i) integrate(grid, depth, blue, camera, SE3::identity());
+  for (const auto& [c, block] : grid.blocks())
+    for (const Voxel& v : block->voxels)
+      if (v.weight != 0) {
+        ASSERT_EQ(hf_voxel_weight(v), 5.0f);
+      }
+}
+
+TEST(Integrate, KernelRejectsBehindSurfaceAndUpdatesFreeSpace) {
+  float depth[4] = {1.0f, 1.0f, 1.0f, 1.0f};
+  const hf_intrinsics K{2.0f, 2.0f, 0.5f, 0.5f, 2, 2};
+  hf_voxel v{};
+  const float mu = 0.04f;
+  EXPECT_EQ(hf_integrate_voxel(&v, hf_make_float4(0, 0, 1.05f, 1), depth, nullptr, K, mu, 100.0f, 1.0f), 0);
+  EXPECT_EQ(v.weight, 0);
+  EXPECT_EQ(hf_integrate_voxel(&v, hf_make_float4(0, 0, -1.0f, 1), depth, nullptr, K, mu, 100.0f, 1.0f), 0);
+  EXPECT_EQ(hf_integrate_voxel(&v, hf_make_float4(0, 0, 0.5f, 1), depth, nullptr, K, mu, 100.0f, 1.0f), 1);
+  EXPECT_EQ(v.sdf, 32767);  // carved: truncated at +1
+  EXPECT_EQ(v.flags, 0);    // no colour given
+  EXPECT_EQ(hf_integrate_voxel(&v, hf_make_float4(0, 0, 1.02f, 1), depth, nullptr, K, mu, 100.0f, 1.0f), 1);
+  EXPECT_NEAR(hf_voxel_sdf(v), (1.0f - 0.5f) / 2, 1e-4f);
+  EXPECT_EQ(hf_voxel_weight(v), 2.0f);
+}
+
+TEST(Integrate, ErrorsAndDeterminism) {
+  const PinholeCamera camera = small_camera();
+  VoxelBlockGrid grid(params_1cm(20));
+  const DepthImage depth = render_plane_depth(camera, SE3::identity(), Eigen::Vector3d::UnitZ(), 1.0);
+  EXPECT_THROW(integrate(grid, DepthImage(10, 10), ColorImage(), camera, SE3::identity()), Error);
+  EXPECT_THROW(integrate(grid, depth, ColorImage(3, 3), camera, SE3::identity()), Error);
+  try {
+    integrate(grid, depth, ColorImage(), camera, SE3::identity());
+    FAIL() << "expected CapacityError";
+  } catch (const CapacityError& e) {
+    EXPECT_NE(std::string(e.what()).find("capacity 20 blocks"), std::string::npos) << e.what();
+  }
+  // The same frames give the same bytes however TBB schedules the blocks.
+  datasets::SyntheticOptions options;
+  options.preset = "sphere";
+  options.frames = 3;
+  options.camera = camera;
+  const datasets::SyntheticSequence seq(options);
+  std::string bytes[2];
+  for (int run = 0; run < 2; ++run) {
+    VoxelBlockGrid g(params_1cm());
+    for (int f = 0; f < seq.size(); ++f) {
+      const auto frame = seq.frame(f);
+      integrate(g, frame.depth, frame.color, camera, frame.T_world_camera);
+    }
+    bytes[run] = serialize_volume(g);
+  }
+  EXPECT_EQ(bytes[0], bytes[1]);
+}
+
+}  // namespace
+}  // namespace hf::fusion

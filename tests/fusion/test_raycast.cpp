@@ -1,0 +1,191 @@
+// Raycasting analytic volumes: depth, vertices, normals and colour against the exact surface; block skipping,
+// back faces, empty volumes and bad options.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "fusion/kernels/raycast_kernels.h"
+#include "fusion/raycast.h"
+#include "datasets/presets.h"
+#include "tests/fusion/analytic_depth.h"
+
+namespace hf::fusion {
+namespace {
+
+using SdfFn = std::function<double(const Eigen::Vector3d&)>;
+
+void fill(VoxelBlockGrid& grid, const SdfFn& sdf, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+          Rgb8 colour = Rgb8{200, 100, 50}) {
+  const double v = grid.params().voxel_m, mu = grid.params().truncation_m(), B = grid.params().block_m();
+  const BlockCoord a = grid.block_of(lo), b = grid.block_of(hi);
+  for (int bz = a.z; bz <= b.z; ++bz)
+    for (int by = a.y; by <= b.y; ++by)
+      for (int bx = a.x; bx <= b.x; ++bx) {
+        const Eigen::Vector3d centre = (Eigen::Vector3d(bx, by, bz) + Eigen::Vector3d::Constant(0.5)) * B;
+        if (std::abs(sdf(centre)) > mu + B) continue;
+        VoxelBlock* block = grid.allocate({bx, by, bz});
+        for (int z = 0; z < 8; ++z)
+          for (int y = 0; y < 8; ++y)
+            for (int x = 0; x < 8; ++x) {
+              const Eigen::Vector3d p = (Eigen::Vector3d(8 * bx + x, 8 * by + y, 8 * bz + z) +
+                                         Eigen::Vector3d::Constant(0.5)) * v;
+              Voxel& vox = block->voxels[hf_voxel_index(x, y, z)];
+              vox.sdf = hf_quantise_sdf(float(std::clamp(sdf(p) / mu, -1.0, 1.0)));
+              vox.weight = hf_quantise_weight(1.0f);
+              vox.r = colour.r, vox.g = colour.g, vox.b = colour.b;
+            }
+      }
+}
+
+VolumeParams params_1cm() {
+  VolumeParams p;
+  p.voxel_m = 0.01;
+  p.capacity_blocks = 1 << 15;
+  return p;
+}
+
+const PinholeCamera kCamera = PinholeCamera::preset("ros").scaled(2);  // 160 x 120
+
+TEST(RaycastKernels, TrilinearAndZeroCrossing) {
+  // A linear function is reproduced exactly.
+  auto f = [](float x, float y, float z) { return 0.3f + 0.5f * x - 0.25f * y + 0.125f * z; };
+  EXPECT_FLOAT_EQ(hf_trilinear(f(0, 0, 0), f(1, 0, 0), f(0, 1, 0), f(1, 1, 0), f(0, 0, 1), f(1, 0, 1), f(0, 1, 1),
+                               f(1, 1, 1), 0.25f, 0.5f, 0.75f),
+                  f(0.25f, 0.5f, 0.75f));
+  EXPECT_FLOAT_EQ(hf_zero_crossing(1.0f, 0.5f, 2.0f, -1.5f), 1.25f);
+  EXPECT_FLOAT_EQ(hf_raycast_step(0.5f, 0.04f, 0.8f, 0.001f), 0.016f);
+  EXPECT_FLOAT_EQ(hf_raycast_step(0.001f, 0.04f, 0.8f, 0.005f), 0.005f);
+  EXPECT_FALSE(hf_is_valid4(hf_normal_from_differences(0.0f, 0.0f, 0.0f)));
+  const hf_float4 n = hf_normal_from_differences(3.0f, 0.0f, -4.0f);
+  EXPECT_FLOAT_EQ(n.x, 0.6f);
+  EXPECT_FLOAT_EQ(n.z, -0.8f);
+}
+
+TEST(Raycast, SphereMatchesAnalyticDepthNormalsAndColour) {
+  VoxelBlockGrid grid(params_1cm());
+  const Eigen::Vector3d c(0.0131, -0.0217, 0.0073);
+  const double r = 0.4;
+  fill(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - r; }, c.array() - 0.5, c.array() + 0.5,
+       Rgb8{10, 20, 30});
+  const SE3 T_world_camera = datasets::look_at({1.3, -0.4, 0.5}, c);
+  const RaycastResult out = raycast(grid, kCamera, T_world_camera);
+  const DepthImage truth = testing::render_sphere_depth(kCamera, T_world_camera, c, r);
+  ASSERT_EQ(out.depth.width(), kCamera.width);
+  int both = 0, miss = 0;
+  double sq = 0.0, worst = 0.0, normal_sq = 0.0;
+  const Eigen::Matrix3d R = T_world_camera.rotation();
+  for (int y = 0; y < kCamera.height; ++y)
+    for (int x = 0; x < kCamera.width; ++x) {
+      const float d = out.depth(x, y), t = truth(x, y);
+      if (t == 0.0f) {
+        EXPECT_EQ(d, 0.0f) << x << "," << y;
+        continue;
+      }
+      if (d == 0.0f) {
+        ++miss;  // only grazing rays at the silhouette may miss
+        continue;
+      }
+      ++both;
+      const double err = double(d) - double(t);
+      sq += err * err;
+      worst = std::max(worst, std::abs(err));
+      const hf_float4 v = out.vertices(x, y), n = out.normals(x, y);
+      ASSERT_EQ(v.w, 1.0f);
+      EXPECT_FLOAT_EQ(v.z, d);
+      ASSERT_EQ(n.w, 1.0f);
+      const Eigen::Vector3d p_world = T_world_camera * Eigen::Vector3d(v.x, v.y, v.z);
+      const Eigen::Vector3d n_true = (p_world - c).normalized();
+      const Eigen::Vector3d n_world = R * Eigen::Vector3d(n.x, n.y, n.z);
+      const double ang = std::acos(std::clamp(n_true.dot(n_world), -1.0, 1.0));
+      normal_sq += ang * ang;
+      EXPECT_EQ(out.color(x, y), (Rgb8{10, 20, 30}));
+      EXPECT_GT(out.shaded(x, y).r, 0);
+    }
+  ASSERT_GT(both, 3000);
+  EXPECT_LT(miss, both / 50);
+  EXPECT_EQ(out.hit_count, both);
+  // Depth along the ray at a 1 cm grid: trilinear interpolation of an exact SDF is within h^2/(8r) of the surface.
+  EXPECT_LT(std::sqrt(sq / both), 0.05 * 0.01);
+  EXPECT_LT(worst, 0.3 * 0.01);
+  EXPECT_LT(std::sqrt(normal_sq / both) * 180.0 / M_PI, 1.0);
+}
+
+TEST(Raycast, TiltedPlaneAcrossManyBlocksAndFarAway) {
+  VoxelBlockGrid grid(params_1cm());
+  const Eigen::Vector3d n = Eigen::Vector3d(0.1, 0.2, 1.0).normalized();
+  const double offset = -0.0137;
+  fill(grid, [&](const Eigen::Vector3d& p) { return n.dot(p) - offset; }, {-1.5, -1.5, -0.5}, {1.5, 1.5, 0.5});
+  // Camera 1.2 m above, looking down obliquely, plus a camera 3 m away along the plane normal.
+  for (const SE3& T : {datasets::look_at({0.3, -0.5, 1.2}, {0.0, 0.1, 0.0}), datasets::look_at({0.0, 0.0, 3.0}, {0.1, 0.0, 0.0})}) {
+    const RaycastResult out = raycast(grid, kCamera, T);
+    const DepthImage truth = testing::render_plane_depth(kCamera, T, n, offset);
+    int hits = 0, expected = 0, bad_normals = 0;
+    for (int y = 0; y < kCamera.height; ++y)
+      for (int x = 0; x < kCamera.width; ++x) {
+        const Eigen::Vector3d p_true = T * kCamera.backproject(x, y, truth(x, y));
+        // Well inside the filled 3 x 3 m patch every ray must hit.
+        if (truth(x, y) > 0.0f && std::abs(p_true.x()) < 1.4 && std::abs(p_true.y()) < 1.4) ++expected;
+        if (out.depth(x, y) == 0.0f) continue;
+        ++hits;
+        // A linear SDF: exact up to float rounding of the ray (t ~ metres, float eps 1e-7 relative).
+        EXPECT_NEAR(out.depth(x, y), truth(x, y), 1e-4) << x << "," << y;
+        const hf_float4 nc = out.normals(x, y);
+        if (nc.w == 0.0f) {
+          ++bad_normals;  // only at the rim of the filled patch, where a gradient sample is unobserved
+          continue;
+        }
+        const Eigen::Vector3d nw = T.rotation() * Eigen::Vector3d(nc.x, nc.y, nc.z);
+        EXPECT_GT(nw.dot(n), std::cos(0.2 * M_PI / 180.0));
+      }
+    EXPECT_GT(expected, kCamera.width * kCamera.height / 2);
+    EXPECT_GE(hits, expected);
+    EXPECT_LT(bad_normals, hits / 20);
+  }
+}
+
+TEST(Raycast, BackFacesAndRangeAreRespected) {
+  VoxelBlockGrid grid(params_1cm());
+  const Eigen::Vector3d c(0.0, 0.0, 0.0);
+  fill(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.4; }, {-0.6, -0.6, -0.6}, {0.6, 0.6, 0.6});
+  // From inside the sphere every ray meets the surface from behind (- to +): no hits.
+  const RaycastResult inside = raycast(grid, kCamera, datasets::look_at({0.05, 0.02, 0.0}, {1.0, 0.0, 0.0}));
+  EXPECT_EQ(inside.hit_count, 0);
+  // The surface lies beyond max_depth_m: no hits; within: hits.
+  const SE3 T = datasets::look_at({2.0, 0.0, 0.0}, c);
+  RaycastOptions opts;
+  opts.max_depth_m = 1.5;
+  EXPECT_EQ(raycast(grid, kCamera, T, opts).hit_count, 0);
+  opts.max_depth_m = 1.7;
+  EXPECT_GT(raycast(grid, kCamera, T, opts).hit_count, 1000);
+  // Rays starting beyond the centre (the front surface is nearer than 1.92 m): they start inside the sphere or
+  // behind it, see only - to + back faces and leave: nothing.
+  opts.min_depth_m = 2.1;
+  opts.max_depth_m = 5.0;
+  EXPECT_EQ(raycast(grid, kCamera, T, opts).hit_count, 0);
+}
+
+TEST(Raycast, EmptyGridAndBadInput) {
+  VoxelBlockGrid grid(params_1cm());
+  RaycastResult out = raycast(grid, kCamera, SE3());
+  EXPECT_EQ(out.hit_count, 0);
+  for (const auto& v : out.vertices.pixels()) EXPECT_EQ(v.w, 0.0f);
+  for (float d : out.depth.pixels()) EXPECT_EQ(d, 0.0f);
+  RaycastOptions bad;
+  bad.step_fraction = 1.5;
+  EXPECT_THROW(raycast(grid, kCamera, SE3(), bad), Error);
+  bad = RaycastOptions{};
+  bad.min_depth_m = 2.0;
+  bad.max_depth_m = 1.0;
+  EXPECT_THROW(raycast(grid, kCamera, SE3(), bad), Error);
+  PinholeCamera cam = kCamera;
+  cam.fx = 0.0;
+  EXPECT_THROW(raycast(grid, cam, SE3()), Error);
+  // Buffers are reused when the size stays.
+  const hf_float4* before = out.vertices.data();
+  raycast(grid, kCamera, SE3(), RaycastOptions{}, &out);
+  EXPECT_EQ(out.vertices.data(), before);
+}
+
+}  // namespace
+}  // namespace hf::fusion

@@ -1,0 +1,213 @@
+#include "fusion/voxel_block_grid.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <random>
+#include <set>
+#include <thread>
+
+#include "fusion/gc.h"
+
+namespace hf::fusion {
+namespace {
+
+VolumeParams small_params(size_t capacity = 4096) {
+  VolumeParams p;
+  p.voxel_m = 0.01;
+  p.capacity_blocks = capacity;
+  return p;
+}
+
+TEST(VoxelBlockGrid, AllocateFindAndVoxelIndexing) {
+  VoxelBlockGrid grid(small_params());
+  EXPECT_EQ(grid.block_count(), 0u);
+  EXPECT_EQ(grid.find({0, 0, 0}), nullptr);
+  bool created = false;
+  VoxelBlock* b = grid.allocate({-1, 2, -3}, &created);
+  EXPECT_TRUE(created);
+  EXPECT_EQ(grid.allocate({-1, 2, -3}, &created), b);
+  EXPECT_FALSE(created);
+  EXPECT_EQ(grid.find({-1, 2, -3}), b);
+  for (const Voxel& v : b->voxels) EXPECT_EQ(v.weight, 0);
+  // World voxel (-8, 16, -24) is voxel (0, 0, 0) of block (-1, 2, -3); (-1, 23, -17) is (7, 7, 7).
+  EXPECT_EQ(grid.voxel(-8, 16, -24), &b->voxels[0]);
+  EXPECT_EQ(grid.voxel(-1, 23, -17), &b->voxels[hf_voxel_index(7, 7, 7)]);
+  EXPECT_EQ(grid.voxel(0, 16, -24), nullptr);
+  // block_of and voxel_coords agree with the documented geometry.
+  const BlockCoord c = grid.block_of(Eigen::Vector3d(-0.001, 0.16, -0.2399));
+  EXPECT_EQ(c, (BlockCoord{-1, 2, -3}));
+  EXPECT_TRUE(grid.voxel_coords(Eigen::Vector3d(0.005, 0.015, -0.005)).isApprox(Eigen::Vector3d(0, 1, -1)));
+  EXPECT_EQ(grid.memory_bytes() >= sizeof(VoxelBlock), true);
+  EXPECT_TRUE(grid.release({-1, 2, -3}));
+  EXPECT_FALSE(grid.release({-1, 2, -3}));
+  EXPECT_EQ(grid.block_count(), 0u);
+}
+
+TEST(VoxelBlockGrid, ValidatesParams) {
+  VolumeParams p = small_params();
+  p.voxel_m = 0.0;
+  EXPECT_THROW(VoxelBlockGrid{p}, Error);
+  p = small_params();
+  p.truncation_vox = 0.5;
+  EXPECT_THROW(VoxelBlockGrid{p}, Error);
+  p = small_params();
+  p.max_weight = 5000.0f;  // would overflow the uint16 weight
+  EXPECT_THROW(VoxelBlockGrid{p}, Error);
+  p = small_params(0);
+  try {
+    VoxelBlockGrid grid(p);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("capacity_blocks"), std::string::npos) << e.what();
+  }
+}
+
+TEST(VoxelBlockGrid, QuantisationRoundTrips) {
+  EXPECT_EQ(hf_quantise_sdf(1.0f), 32767);
+  EXPECT_EQ(hf_quantise_sdf(-1.0f), -32767);
+  EXPECT_EQ(hf_quantise_sdf(7.0f), 32767);  // clamped
+  EXPECT_EQ(hf_quantise_sdf(0.0f), 0);
+  for (float s = -1.0f; s <= 1.0f; s += 0.001f) {
+    hf_voxel v{};
+    v.sdf = hf_quantise_sdf(s);
+    EXPECT_LE(std::abs(hf_voxel_sdf(v) - s), 0.5f / HF_SDF_SCALE + 1e-7f);
+  }
+  hf_voxel v{};
+  v.weight = hf_quantise_weight(128.0f);
+  EXPECT_EQ(hf_voxel_weight(v), 128.0f);
+  EXPECT_EQ(hf_quantise_weight(1e9f), HF_WEIGHT_MAX_RAW);
+  EXPECT_EQ(hf_quantise_weight(-1.0f), 0);
+}
+
+// Coordinates whose full hash value is identical: x = a^-1 (H ^ y b ^ z c) mod 2^32 (a is odd, so invertible).
+std::vector<BlockCoord> colliding_coords(int n, std::uint32_t H) {
+  const std::uint32_t a = 73856093u, b = 19349669u, c = 83492791u;
+  std::uint32_t inv = a;  // Newton iteration for the inverse of an odd number mod 2^32
+  for (int i = 0; i < 5; ++i) inv *= 2u - a * inv;
+  std::vector<BlockCoord> out;
+  for (int i = 0; out.size() < size_t(n); ++i) {
+    const int y = i % 64 - 32, z = i / 64 - 16;
+    const std::uint32_t x = inv * (H ^ (std::uint32_t(y) * b) ^ (std::uint32_t(z) * c));
+    out.push_back({int(x), y, z});
+  }
+  return out;
+}
+
+TEST(VoxelBlockGrid, HashStressWithCollidingKeys) {
+  const auto coords = colliding_coords(1500, 0xdeadbeefu);
+  const BlockCoordHash hash;
+  for (const auto& c : coords) ASSERT_EQ(hash(c), hash(coords[0]));
+  VoxelBlockGrid grid(small_params());
+  std::set<VoxelBlock*> distinct;
+  for (size_t i = 0; i < coords.size(); ++i) {
+    VoxelBlock* b = grid.allocate(coords[i]);
+    b->voxels[0].weight = hf_uint16(i);
+    b->voxels[1].weight = hf_uint16(i >> 16);
+    distinct.insert(b);
+  }
+  EXPECT_EQ(distinct.size(), coords.size());
+  EXPECT_EQ(grid.block_count(), coords.size());
+  // Remove every other one, then every remaining one still finds its own block.
+  for (size_t i = 0; i < coords.size(); i += 2) EXPECT_TRUE(grid.release(coords[i]));
+  for (size_t i = 0; i < coords.size(); ++i) {
+    const VoxelBlock* b = grid.find(coords[i]);
+    if (i % 2 == 0) {
+      EXPECT_EQ(b, nullptr);
+    } else {
+      ASSERT_NE(b, nullptr);
+      EXPECT_EQ(b->voxels[0].weight, hf_uint16(i));
+    }
+  }
+  // Freed slots are reused, and come back zeroed.
+  for (size_t i = 0; i < coords.size(); i += 2) {
+    VoxelBlock* b = grid.allocate(coords[i]);
+    EXPECT_EQ(b->voxels[0].weight, 0);
+  }
+  EXPECT_EQ(grid.block_count(), coords.size());
+}
+
+TEST(VoxelBlockGrid, CapacityExhaustionThrowsTypedError) {
+  VoxelBlockGrid grid(small_params(10));
+  for (int i = 0; i < 10; ++i) grid.allocate({i, 0, 0});
+  EXPECT_NO_THROW(grid.allocate({3, 0, 0}));  // existing blocks are still found
+  try {
+    grid.allocate({10, 0, 0});
+    FAIL() << "expected CapacityError";
+  } catch (const CapacityError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("capacity 10 blocks"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("capacity_blocks"), std::string::npos) << msg;
+  }
+  EXPECT_EQ(grid.block_count(), 10u);
+  grid.release({0, 0, 0});
+  EXPECT_NO_THROW(grid.allocate({10, 0, 0}));
+}
+
+TEST(VoxelBlockGrid, ConcurrentAllocationGivesOneBlockPerCoord) {
+  VoxelBlockGrid grid(small_params(1 << 14));
+  constexpr int kThreads = 8, kCoords = 3000;
+  std::vector<std::vector<VoxelBlock*>> seen(kThreads, std::vector<VoxelBlock*>(kCoords));
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t] {
+      std::vector<int> order(kCoords);
+      for (int i = 0; i < kCoords; ++i) order[i] = i;
+      std::shuffle(order.begin(), order.end(), std::mt19937(t));
+      for (int i : order) seen[t][i] = grid.allocate({i % 20, (i / 20) % 20, i / 400});
+    });
+  }
+  for (auto& th : threads) th.join();
+  EXPECT_EQ(grid.block_count(), size_t(kCoords));
+  std::set<VoxelBlock*> distinct;
+  for (int i = 0; i < kCoords; ++i) {
+    for (int t = 1; t < kThreads; ++t) ASSERT_EQ(seen[t][i], seen[0][i]) << "coord " << i;
+    distinct.insert(seen[0][i]);
+    EXPECT_EQ(grid.find({i % 20, (i / 20) % 20, i / 400}), seen[0][i]);
+  }
+  EXPECT_EQ(distinct.size(), size_t(kCoords));
+}
+
+TEST(VoxelBlockGrid, IterationIsSortedAndComplete) {
+  VoxelBlockGrid grid(small_params());
+  grid.allocate({1, 0, 0});
+  grid.allocate({0, 0, 1});
+  grid.allocate({0, 1, 0});
+  grid.allocate({-1, 0, 0});
+  const auto coords = grid.block_coords();
+  ASSERT_EQ(coords.size(), 4u);
+  EXPECT_EQ(coords[0], (BlockCoord{-1, 0, 0}));
+  EXPECT_EQ(coords[1], (BlockCoord{1, 0, 0}));
+  EXPECT_EQ(coords[2], (BlockCoord{0, 1, 0}));
+  EXPECT_EQ(coords[3], (BlockCoord{0, 0, 1}));
+  std::vector<BlockCoord> visited;
+  grid.for_each_block([&](const BlockCoord& c, const VoxelBlock&) { visited.push_back(c); });
+  EXPECT_EQ(visited, coords);
+}
+
+TEST(GarbageCollect, ReleasesUnobservedAndFreeSpaceBlocksOnly) {
+  VoxelBlockGrid grid(small_params());
+  grid.allocate({0, 0, 0});  // never observed
+  VoxelBlock* free_space = grid.allocate({1, 0, 0});
+  for (auto& v : free_space->voxels) v = Voxel{hf_int16(32767), hf_uint16(32), 0, 0, 0, 0};
+  free_space->voxels[5].weight = 0;  // unobserved voxels do not keep it alive
+  VoxelBlock* surface = grid.allocate({2, 0, 0});
+  for (auto& v : surface->voxels) v = Voxel{hf_int16(32767), hf_uint16(32), 0, 0, 0, 0};
+  surface->voxels[100].sdf = -1000;  // one voxel near a surface
+  VoxelBlock* inside = grid.allocate({3, 0, 0});
+  for (auto& v : inside->voxels) v = Voxel{hf_int16(-32767), hf_uint16(32), 0, 0, 0, 0};
+
+  GcParams keep_free;
+  keep_free.release_free_space = false;
+  EXPECT_TRUE(block_is_empty(*grid.find({0, 0, 0})));
+  EXPECT_FALSE(block_is_empty(*free_space, keep_free));
+  EXPECT_EQ(garbage_collect(grid), 2u);
+  EXPECT_EQ(grid.block_count(), 2u);
+  EXPECT_NE(grid.find({2, 0, 0}), nullptr);
+  EXPECT_NE(grid.find({3, 0, 0}), nullptr);
+  EXPECT_EQ(garbage_collect(grid), 0u);
+}
+
+}  // namespace
+}  // namespace hf::fusion

@@ -1,0 +1,322 @@
+// The OpenCL reduction backend against the C++ one and against exact sums (registration/opencl/).
+// Every test skips with a message when no OpenCL platform is installed (e.g. no pocl-opencl-icd); the
+// registration_opencl_no_platform CTest entry runs NoPlatform.* with the ICD loader pointed at an empty folder.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "datasets/synthetic_sequence.h"
+#include "registration/cpu_backend.h"
+#include "registration/frame_pyramid.h"
+#include "registration/gauss_newton.h"
+#include "registration/opencl/opencl_backend.h"
+
+namespace hf {
+namespace {
+
+bool have_opencl() { return !opencl::list_devices().empty(); }
+
+#define HF_SKIP_WITHOUT_OPENCL()                                                                          \
+  if (!have_opencl()) {                                                                                   \
+    GTEST_SKIP() << "no OpenCL platform found (install pocl-opencl-icd): the OpenCL backend is not tested"; \
+  }
+
+// The exact double sums of rows, accumulated exactly as the C++ backend does (hf_reg_accumulate).
+std::vector<double> double_sums(const std::vector<hf_reg_row>& rows) {
+  std::vector<double> sums(HF_REG_SUMS, 0.0);
+  for (const hf_reg_row& row : rows) hf_reg_accumulate(&row, sums.data());
+  return sums;
+}
+
+std::vector<hf_reg_row> random_rows(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> J(-2.0f, 2.0f), r(-0.05f, 0.05f), w(0.0f, 1.0f);
+  std::vector<hf_reg_row> rows(static_cast<size_t>(n));
+  for (hf_reg_row& row : rows) {
+    for (float& j : row.J) j = J(rng);
+    row.r = r(rng);
+    row.w = w(rng);
+  }
+  return rows;
+}
+
+double max_abs(const std::vector<double>& v) {
+  double m = 0.0;
+  for (double x : v) m = std::max(m, std::fabs(x));
+  return m;
+}
+
+TEST(OpenClContext, ListsDevicesAndDescribesTheChosenOne) {
+  HF_SKIP_WITHOUT_OPENCL();
+  auto ctx = opencl::Context::shared();
+  EXPECT_FALSE(ctx->info().device_name.empty());
+  EXPECT_GE(ctx->info().max_work_group_size, 1u);
+  EXPECT_NE(ctx->info().describe().find(ctx->info().device_name), std::string::npos);
+  // Shared while held: a second request gets the same context (programs are built once).
+  EXPECT_EQ(opencl::Context::shared().get(), ctx.get());
+}
+
+TEST(OpenClContext, UnknownDeviceSpecIsAnErrorListingTheDevices) {
+  HF_SKIP_WITHOUT_OPENCL();
+  try {
+    opencl::Context ctx("no-such-device-zz9");
+    FAIL() << "expected hf::Error";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("no-such-device-zz9"), std::string::npos) << what;
+    EXPECT_NE(what.find(opencl::list_devices().front().device_name), std::string::npos) << what;
+  }
+  EXPECT_THROW(opencl::Context("7:7"), Error);
+  // Index and type specs pick the listed device.
+  const opencl::DeviceInfo first = opencl::list_devices().front();
+  opencl::Context by_index(std::to_string(first.platform_index) + ":" + std::to_string(first.device_index));
+  EXPECT_EQ(by_index.info().device_name, first.device_name);
+}
+
+TEST(OpenClContext, CompileErrorSurfacesWithTheBuildLog) {
+  HF_SKIP_WITHOUT_OPENCL();
+  auto ctx = opencl::Context::shared();
+  const std::string broken = "__kernel void broken(__global float* x) { x[0] = hf_no_such_identifier_42; }\n";
+  try {
+    ctx->program("test-broken", broken);
+    FAIL() << "expected hf::Error";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("failed to build"), std::string::npos) << what;
+    EXPECT_NE(what.find("test-broken"), std::string::npos) << what;
+    // The build log names the offending identifier.
+    EXPECT_NE(what.find("hf_no_such_identifier_42"), std::string::npos) << what;
+  }
+}
+
+TEST(OpenClContext, ProgramsAreBuiltOncePerKey) {
+  HF_SKIP_WITHOUT_OPENCL();
+  auto ctx = opencl::Context::shared();
+  const std::string src = "__kernel void twice(__global float* x) { x[get_global_id(0)] *= 2.0f; }\n";
+  cl::Program a = ctx->program("test-twice", src);
+  cl::Program b = ctx->program("test-twice", src);
+  EXPECT_EQ(a(), b());
+  EXPECT_THROW(ctx->program("test-twice", src, "-DX=1"), Error);
+}
+
+TEST(OpenClContext, EmbeddedSourceInlinesTheSharedHeaders) {
+  const std::string_view src = opencl::registration_program_source();
+  EXPECT_NE(src.find("hf_reg_pixel"), std::string_view::npos);
+  EXPECT_NE(src.find("#line 1 \"registration/kernels/reg_common.h\""), std::string_view::npos);
+  EXPECT_NE(src.find("#line 1 \"core/kernels/cl_compat.h\""), std::string_view::npos);
+  EXPECT_EQ(src.find("\n#include \"registration/"), std::string_view::npos);  // all inlined
+}
+
+class OpenClRows : public ::testing::TestWithParam<int> {};
+
+TEST_P(OpenClRows, ReductionOfKnownRowsEqualsTheDoubleSum) {
+  HF_SKIP_WITHOUT_OPENCL();
+  opencl::OpenClBackendOptions options;
+  options.pixels_per_item = GetParam();
+  opencl::OpenClReductionBackend backend(opencl::Context::shared(), options);
+  // Not a multiple of any work-group size, so partial groups and idle items are exercised.
+  for (int n : {0, 1, 7, 1000, 100003}) {
+    const std::vector<hf_reg_row> rows = random_rows(n, 17u + unsigned(n));
+    const std::vector<double> expected = double_sums(rows);
+    const std::vector<double> got = backend.reduce_rows(rows);
+    ASSERT_EQ(got.size(), size_t(HF_REG_SUMS));
+    // Double accumulation reorders additions of ~1e5 terms: a few ulps of the largest sum. Float accumulation
+    // (devices without fp64) is a pairwise tree: ~log2(n) float roundings.
+    const double tol = (backend.accumulates_in_double() ? 1e-12 : 1e-5) * std::max(1.0, max_abs(expected));
+    for (int k = 0; k < HF_REG_SUMS; ++k) EXPECT_NEAR(got[size_t(k)], expected[size_t(k)], tol) << "n=" << n << " k=" << k;
+    EXPECT_EQ(got[HF_REG_SUM_COUNT], double(n));
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(PixelsPerItem, OpenClRows, ::testing::Values(1, 4, 33));
+
+// Two-level pyramids of two frames of the synthetic room with sensor noise, at 160x120 so that each test process
+// (CTest runs every case on its own, also under ASan) renders them in well under a second.
+struct FramePair {
+  FramePyramid cur, ref;
+  SE3 T_ref_cur_true;
+};
+
+const FramePair& room_pair() {
+  static const FramePair pair = [] {
+    datasets::SyntheticOptions options;
+    options.preset = "room";
+    options.frames = 10;
+    options.camera = PinholeCamera::preset("ros").scaled(2);
+    datasets::SyntheticSequence seq(options);
+    const datasets::SyntheticFrame a = seq.frame(0), b = seq.frame(3);
+    FramePyramidOptions po;
+    po.levels = 2;
+    FramePair p;
+    p.ref = build_frame_pyramid(a.depth, &a.color, seq.camera(), po);
+    p.cur = build_frame_pyramid(b.depth, &b.color, seq.camera(), po);
+    p.T_ref_cur_true = a.T_world_camera.inverse() * b.T_world_camera;
+    return p;
+  }();
+  return pair;
+}
+
+ResidualProblem make_problem(const FramePair& pair, int level, int method, int robust, const SE3& T) {
+  const FramePyramidLevel& c = pair.cur.levels[size_t(level)];
+  const FramePyramidLevel& r = pair.ref.levels[size_t(level)];
+  ResidualProblem p;
+  p.camera = hf_intrinsics{float(c.camera.fx), float(c.camera.fy), float(c.camera.cx), float(c.camera.cy),
+                           c.camera.width, c.camera.height};
+  p.cur_vertices = c.vertices.data();
+  p.cur_normals = c.normals.data();
+  p.cur_intensity = c.intensity.data();
+  p.ref_vertices = r.vertices.data();
+  p.ref_normals = r.normals.data();
+  p.ref_intensity = r.intensity.data();
+  p.ref_grad_x = r.grad_x.data();
+  p.ref_grad_y = r.grad_y.data();
+  p.T_ref_cur = to_transform12(T);
+  p.params.method = method;
+  p.params.max_dist_m = 0.1f;
+  p.params.min_normal_cos = std::cos(30.0f * 3.14159265f / 180.0f);
+  p.params.icp_weight = 1.0f;
+  p.params.rgb_weight = method == HF_REG_COMBINED ? 0.1f : 1.0f;
+  p.params.robust_icp = robust;
+  p.params.scale_icp = 0.01f;
+  p.params.robust_rgb = robust;
+  p.params.scale_rgb = 0.05f;
+  p.params.t_dof = 5.0f;
+  p.params.min_gradient_sq = 0.0f;
+  p.params.occlusion_check = 1;
+  p.inputs_version = 1;
+  return p;
+}
+
+double max_abs_diff(const Matrix6d& a, const Matrix6d& b) { return (a - b).cwiseAbs().maxCoeff(); }
+
+struct MethodCase {
+  const char* name;
+  int method;
+  int robust;
+};
+
+class BackendsAgree : public ::testing::TestWithParam<MethodCase> {};
+
+TEST_P(BackendsAgree, OnTheNormalEquationsAndTheSolvedStep) {
+  HF_SKIP_WITHOUT_OPENCL();
+  const FramePair& pair = room_pair();
+  const MethodCase mc = GetParam();
+  CpuReductionBackend cpu;
+  opencl::OpenClReductionBackend cl_backend;
+  // Start 1 cm / ~0.6 degrees off the true motion so the step is a real correction, at both levels.
+  Vector6d delta;
+  delta << 0.004, -0.006, 0.008, 0.01, -0.004, 0.006;
+  const SE3 T0 = SE3::exp(delta) * pair.T_ref_cur_true;
+  for (int level = 0; level < 2; ++level) {
+    ResidualProblem p = make_problem(pair, level, mc.method, mc.robust, T0);
+    p.inputs_version = std::uint64_t(level + 1);
+    const NormalEquations a = cpu.reduce(p);
+    const NormalEquations b = cl_backend.reduce(p);
+    ASSERT_GT(a.count, 500) << mc.name << " level " << level;
+    EXPECT_EQ(a.count, b.count) << mc.name << " level " << level;
+    // 1e-6 relative (to the largest entry) on H, g and the cost.
+    EXPECT_LE(max_abs_diff(a.JtJ, b.JtJ), 1e-6 * a.JtJ.cwiseAbs().maxCoeff()) << mc.name << " level " << level;
+    EXPECT_LE((a.Jtr - b.Jtr).cwiseAbs().maxCoeff(), 1e-6 * a.Jtr.cwiseAbs().maxCoeff()) << mc.name;
+    EXPECT_NEAR(a.cost, b.cost, 1e-6 * a.cost) << mc.name;
+    // The step the driver would take, from the driver's own solver: 1e-9 (radians, metres).
+    const GaussNewtonStep sa = solve_gauss_newton_step(a.JtJ, a.Jtr, 1e-6);
+    const GaussNewtonStep sb = solve_gauss_newton_step(b.JtJ, b.Jtr, 1e-6);
+    ASSERT_TRUE(sa.finite && sb.finite);
+    EXPECT_GT(sa.xi.norm(), 1e-4) << mc.name << ": the step should be a real correction";
+    EXPECT_LE((sa.xi - sb.xi).cwiseAbs().maxCoeff(), 1e-9)
+        << mc.name << " level " << level << "\ncpu    " << sa.xi.transpose() << "\nopencl " << sb.xi.transpose();
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Methods, BackendsAgree,
+    ::testing::Values(MethodCase{"icp", HF_REG_ICP, HF_ROBUST_NONE}, MethodCase{"icp_huber", HF_REG_ICP, HF_ROBUST_HUBER},
+                      MethodCase{"photometric", HF_REG_PHOTOMETRIC, HF_ROBUST_NONE},
+                      MethodCase{"photometric_t", HF_REG_PHOTOMETRIC, HF_ROBUST_STUDENT_T},
+                      MethodCase{"combined", HF_REG_COMBINED, HF_ROBUST_NONE},
+                      MethodCase{"combined_robust", HF_REG_COMBINED, HF_ROBUST_HUBER}),
+    [](const ::testing::TestParamInfo<MethodCase>& info) { return std::string(info.param.name); });
+
+TEST(OpenClBackend, ReusesUploadedMapsWhileTheInputsVersionHolds) {
+  HF_SKIP_WITHOUT_OPENCL();
+  const FramePair& pair = room_pair();
+  opencl::OpenClReductionBackend backend;
+  ResidualProblem p = make_problem(pair, 1, HF_REG_COMBINED, HF_ROBUST_HUBER, pair.T_ref_cur_true);
+  p.inputs_version = 42;
+  const NormalEquations first = backend.reduce(p);
+  EXPECT_EQ(backend.uploads(), 1u);
+  // A new pose only (the next iteration): no upload, different equations.
+  Vector6d delta;
+  delta << 0.0, 0.0, 0.01, 0.0, 0.0, 0.0;
+  p.T_ref_cur = to_transform12(SE3::exp(delta) * pair.T_ref_cur_true);
+  const NormalEquations moved = backend.reduce(p);
+  EXPECT_EQ(backend.uploads(), 1u);
+  EXPECT_GT((moved.JtJ - first.JtJ).cwiseAbs().maxCoeff(), 0.0);
+  // Same inputs again: bit-identical (deterministic group order and host sum).
+  p.T_ref_cur = to_transform12(pair.T_ref_cur_true);
+  const NormalEquations again = backend.reduce(p);
+  EXPECT_EQ(again.to_sums(), first.to_sums());
+  // A new version (the next level or frame) uploads again, and so does a different map pointer.
+  p.inputs_version = 43;
+  backend.reduce(p);
+  EXPECT_EQ(backend.uploads(), 2u);
+  p = make_problem(pair, 0, HF_REG_COMBINED, HF_ROBUST_HUBER, pair.T_ref_cur_true);
+  p.inputs_version = 43;
+  const NormalEquations level0 = backend.reduce(p);
+  EXPECT_EQ(backend.uploads(), 3u);
+  CpuReductionBackend cpu;
+  EXPECT_EQ(level0.count, cpu.reduce(p).count);
+}
+
+TEST(OpenClBackend, MapsAMethodDoesNotReadMayBeNull) {
+  HF_SKIP_WITHOUT_OPENCL();
+  const FramePair& pair = room_pair();
+  ResidualProblem p = make_problem(pair, 1, HF_REG_ICP, HF_ROBUST_NONE, pair.T_ref_cur_true);
+  p.cur_intensity = p.ref_intensity = p.ref_grad_x = p.ref_grad_y = nullptr;
+  opencl::OpenClReductionBackend backend;
+  CpuReductionBackend cpu;
+  EXPECT_EQ(backend.reduce(p).count, cpu.reduce(p).count);
+}
+
+TEST(OpenClBackend, MalformedProblemIsAnError) {
+  HF_SKIP_WITHOUT_OPENCL();
+  const FramePair& pair = room_pair();
+  ResidualProblem p = make_problem(pair, 1, HF_REG_PHOTOMETRIC, HF_ROBUST_NONE, pair.T_ref_cur_true);
+  p.ref_grad_x = nullptr;
+  opencl::OpenClReductionBackend backend;
+  EXPECT_THROW(backend.reduce(p), Error);
+  p = make_problem(pair, 1, HF_REG_ICP, HF_ROBUST_NONE, pair.T_ref_cur_true);
+  p.camera.width = 0;
+  EXPECT_THROW(backend.reduce(p), Error);
+}
+
+TEST(OpenClBackend, IsTheOpenclEntryOfTheBackendRegistry) {
+  HF_SKIP_WITHOUT_OPENCL();
+  std::unique_ptr<ReductionBackend> backend = make_backend("opencl");
+  EXPECT_EQ(backend->name(), "opencl");
+}
+
+// Run by CTest with OCL_ICD_VENDORS pointing at an empty folder (registration_opencl_no_platform); in the normal
+// run it only checks the message when the machine really has no platform.
+TEST(NoPlatform, OpenclBackendFailsWithAClearMessage) {
+  if (have_opencl()) GTEST_SKIP() << "an OpenCL platform is present; this case runs under registration_opencl_no_platform";
+  try {
+    make_opencl_backend();
+    FAIL() << "expected hf::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no OpenCL platform found: install pocl-opencl-icd or use --backend cpu"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(make_backend("opencl"), Error);
+  EXPECT_NO_THROW(make_backend("cpu"));
+}
+
+}  // namespace
+}  // namespace hf
