@@ -318,6 +318,7 @@ void BM_Reduce_cpu(benchmark::State& state, int method) {
 void BM_Reduce_opencl(benchmark::State& state, int method) {
   opencl::OpenClBackendOptions options;
   options.pixels_per_item = int(state.range(0));
+  options.max_work_group_size = std::size_t(state.range(1));
   std::unique_ptr<opencl::OpenClReductionBackend> backend;
   try {
     backend = std::make_unique<opencl::OpenClReductionBackend>(opencl::Context::shared(), options);
@@ -338,12 +339,14 @@ void register_benchmarks() {
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime();
 #ifdef HF_BENCH_HAVE_OPENCL
-    // Argument: pixels per work-item.
+    // Arguments: pixels per work-item, largest work-group size.
     benchmark::RegisterBenchmark((std::string("BM_Reduce/") + name + "/opencl").c_str(), BM_Reduce_opencl, id)
-        ->Arg(1)
-        ->Arg(4)
-        ->Arg(16)
-        ->Arg(64)
+        ->Args({1, 256})
+        ->Args({4, 256})
+        ->Args({16, 256})
+        ->Args({4, 64})
+        ->Args({16, 64})
+        ->Args({64, 16})
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime();
 #endif
