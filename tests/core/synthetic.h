@@ -1,5 +1,6 @@
-// Analytic depth images for the core tests: planes and spheres rendered exactly (in double, rounded once to
-// float), so tests can compare pyramids, filters and normals against the true surface.
+// Analytic depth images for the core tests, in the camera frame: planes and spheres rendered exactly (through
+// tests/common/analytic_depth.h with the identity pose), so tests can compare pyramids, filters and normals
+// against the true surface.
 #pragma once
 
 #include <Eigen/Core>
@@ -9,6 +10,8 @@
 
 #include "core/camera.h"
 #include "core/image.h"
+#include "core/se3.h"
+#include "tests/common/analytic_depth.h"
 
 namespace hf::test {
 
@@ -24,27 +27,11 @@ inline double plane_depth(const PinholeCamera& cam, const Eigen::Vector3d& n, do
 }
 
 inline DepthImage render_plane(const PinholeCamera& cam, const Eigen::Vector3d& n, double dist_m) {
-  DepthImage d(cam.width, cam.height);
-  for (int y = 0; y < cam.height; ++y)
-    for (int x = 0; x < cam.width; ++x) d(x, y) = float(plane_depth(cam, n, dist_m, x, y));
-  return d;
-}
-
-// First intersection of the pixel ray with the sphere, 0 if it misses.
-inline double sphere_depth(const PinholeCamera& cam, const Eigen::Vector3d& centre, double radius_m, double x,
-                           double y) {
-  const Eigen::Vector3d r = pixel_ray(cam, x, y);
-  const double a = r.squaredNorm(), b = r.dot(centre), c = centre.squaredNorm() - radius_m * radius_m;
-  const double disc = b * b - a * c;
-  if (disc < 0.0) return 0.0;
-  return (b - std::sqrt(disc)) / a;  // t with p = t r, and r.z = 1 so the depth is t
+  return testing::render_plane_depth(cam, SE3(), n, dist_m);
 }
 
 inline DepthImage render_sphere(const PinholeCamera& cam, const Eigen::Vector3d& centre, double radius_m) {
-  DepthImage d(cam.width, cam.height);
-  for (int y = 0; y < cam.height; ++y)
-    for (int x = 0; x < cam.width; ++x) d(x, y) = float(sphere_depth(cam, centre, radius_m, x, y));
-  return d;
+  return testing::render_sphere_depth(cam, SE3(), centre, radius_m);
 }
 
 // Adds N(0, sigma_m^2) to every valid pixel (deterministic for a given seed).

@@ -9,7 +9,7 @@
 #include "fusion/integrate.h"
 #include "fusion/mesh.h"
 #include "fusion/raycast.h"
-#include "tests/fusion/analytic_depth.h"
+#include "tests/common/analytic_depth.h"
 
 namespace hf::fusion {
 namespace {

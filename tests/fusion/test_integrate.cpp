@@ -9,7 +9,7 @@
 #include "datasets/synthetic_sequence.h"
 #include "fusion/kernels/integrate_kernels.h"
 #include "fusion/volume_io.h"
-#include "tests/fusion/analytic_depth.h"
+#include "tests/common/analytic_depth.h"
 
 namespace hf::fusion {
 namespace {

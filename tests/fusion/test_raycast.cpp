@@ -8,7 +8,7 @@
 #include "fusion/kernels/raycast_kernels.h"
 #include "fusion/raycast.h"
 #include "datasets/presets.h"
-#include "tests/fusion/analytic_depth.h"
+#include "tests/common/analytic_depth.h"
 
 namespace hf::fusion {
 namespace {

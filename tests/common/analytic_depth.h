@@ -1,4 +1,5 @@
-// Exact depth images of analytic planes and spheres for fusion tests (double precision ray casts, stored as float).
+// Exact depth images of analytic planes and spheres seen from any pose (double precision ray casts, stored as
+// float), shared by the core and fusion tests so both compare against one definition of the true surface.
 #pragma once
 
 #include <cmath>
@@ -9,7 +10,7 @@
 #include "core/image.h"
 #include "core/se3.h"
 
-namespace hf::fusion::testing {
+namespace hf::testing {
 
 // Depth along the optical axis of the sphere (centre_world, radius_m) seen by camera at T_world_camera; 0 = miss.
 inline DepthImage render_sphere_depth(const PinholeCamera& camera, const SE3& T_world_camera,
@@ -49,4 +50,4 @@ inline DepthImage render_plane_depth(const PinholeCamera& camera, const SE3& T_w
   return depth;
 }
 
-}  // namespace hf::fusion::testing
+}  // namespace hf::testing
