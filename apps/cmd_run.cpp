@@ -1,25 +1,19 @@
-// `hashfusion run`: the main job. Until fusion and registration land, it replays a dataset with a trivial pose
-// source ("groundtruth" or "identity"), then evaluates and reports the trajectory, so the whole path from input
-// to report is exercised and every output a user expects is already in place.
+// `hashfusion run`: the main job. A dataset (TUM or 7-Scenes folder, or synthetic:PRESET generated on the fly) goes
+// through the SLAM pipeline (slam/pipeline.h) and the outputs land in --out: trajectory.txt, mesh.ply, report.json,
+// report.md, render.png and, with ground truth, trajectory.png. Ctrl-C stops after the current frame and still
+// writes every output for the frames processed.
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
 #include <filesystem>
 #include <iostream>
-#include <nlohmann/json.hpp>
-#include <optional>
-#include <sstream>
 
 #include "apps/commands.h"
-#include "core/atomic_file.h"
 #include "core/error.h"
-#include "core/progress.h"
-#include "core/timing.h"
 #include "datasets/synthetic_source.h"
 #include "io/dataset.h"
-#include "io/trajectory_io.h"
-#include "slam/eval.h"
-#include "slam/eval_plot.h"
+#include "slam/pipeline.h"
+#include "slam/sequence_run.h"
 
 namespace hf::apps {
 namespace {
@@ -30,8 +24,11 @@ extern "C" void on_sigint(int) { g_interrupted.store(true); }
 struct RunOptions {
   std::string input = "synthetic:room";
   std::string out = "out/run";
-  std::string registration = "groundtruth";
+  std::string registration = "combined";
+  std::string backend = "cpu";
   std::string camera;
+  std::string config_file;
+  double voxel_m = 0.01;
   long max_frames = 0;  // 0 = all
   int synthetic_frames = 90;
   std::uint64_t seed = 0;
@@ -50,137 +47,76 @@ std::unique_ptr<FrameSource> open_input(const RunOptions& o) {
   return open_dataset(o.input, d);
 }
 
-void run(const RunOptions& o) {
-  if (o.registration != "groundtruth" && o.registration != "identity")
-    throw Error("unknown --registration '" + o.registration + "' (known now: groundtruth, identity)");
+// The configuration: defaults, then the --config file, then the flags given on the command line.
+slam::PipelineConfig make_config(const RunOptions& o, const CLI::App& cmd) {
+  slam::PipelineConfig c = o.config_file.empty() ? slam::PipelineConfig{} : slam::load_config(o.config_file);
+  if (o.config_file.empty() || cmd.count("--registration")) c.registration = o.registration;
+  if (o.config_file.empty() || cmd.count("--backend")) c.backend = o.backend;
+  if (o.config_file.empty() || cmd.count("--voxel-m")) c.volume.voxel_m = o.voxel_m;
+  // A method change on the command line must not inherit another method's options from the file.
+  if (cmd.count("--registration") && c.registration_options && !o.config_file.empty()) c.registration_options.reset();
+  c.validate();
+  return c;
+}
+
+void run(const RunOptions& o, const CLI::App& cmd) {
+  const slam::PipelineConfig config = make_config(o, cmd);
   std::unique_ptr<FrameSource> source = open_input(o);
-  std::error_code ec;
-  std::filesystem::create_directories(o.out, ec);
-  if (ec || !std::filesystem::is_directory(o.out)) throw Error(o.out + ": cannot create output folder");
-
+  if (source->size() == 0) throw Error(o.input + ": the dataset has no frames");
   std::cerr << "input: " << source->name() << ", " << source->size() << " frames\n"
-            << "camera: " << source->camera().describe() << " (" << source->camera_origin() << ")\n";
+            << "camera: " << source->camera().describe() << " (" << source->camera_origin() << ")\n"
+            << "registration: " << config.registration << " (backend " << config.backend << "), voxel "
+            << config.volume.voxel_m * 1000.0 << " mm\n";
+  slam::Pipeline pipeline(config, source->camera());
 
-  const long total = o.max_frames > 0 ? std::min<long>(o.max_frames, long(source->size())) : long(source->size());
-  Trajectory estimate;
-  StageTimes times;
-  long frames = 0, bad = 0, lost = 0;
-  std::optional<SE3> first_pose;
+  slam::RunControl control;
+  control.max_frames = o.max_frames;
+  control.stop = &g_interrupted;
+  control.progress_label = "run";
+  g_interrupted.store(false);
   auto previous = std::signal(SIGINT, on_sigint);
-  {
-    Progress progress("run", total);
-    while (frames + bad < total && !g_interrupted.load()) {
-      FrameRead r;
-      {
-        ScopedTimer t(times, "read");
-        r = source->next();
-      }
-      if (r.status == FrameStatus::end) break;
-      if (r.status == FrameStatus::bad_frame) {
-        ++bad;
-        std::cerr << "\nwarning: skipping frame " << r.frame.index << ": " << r.message << "\n";
-        continue;
-      }
-      ++frames;
-      ScopedTimer t(times, "track");
-      std::optional<SE3> pose;
-      if (o.registration == "groundtruth") {
-        pose = r.frame.T_world_camera_gt;
-      } else {
-        if (!first_pose) first_pose = r.frame.T_world_camera_gt.value_or(SE3());
-        pose = first_pose;
-      }
-      if (!pose) {
-        ++lost;
-      } else {
-        estimate.push_back({r.frame.timestamp_s, *pose});
-      }
-      progress.update(frames + bad, lost ? "lost " + std::to_string(lost) : "good");
-    }
-    progress.finish();
+  slam::SequenceRun result;
+  try {
+    result = slam::run_sequence(*source, pipeline, control);
+  } catch (...) {
+    std::signal(SIGINT, previous);
+    throw;
   }
   std::signal(SIGINT, previous);
-  if (g_interrupted.load()) std::cerr << "interrupted: writing outputs for the " << frames << " frames processed\n";
-  if (frames == 0) throw Error(o.input + ": no usable frames");
+  if (result.interrupted)
+    std::cerr << "interrupted: writing outputs for the " << result.frames.size() << " frames processed\n";
+  if (result.frames.empty()) throw Error(o.input + ": no usable frames");
 
-  const std::string traj_path = o.out + "/trajectory.txt";
-  write_tum_trajectory(traj_path, estimate, "hashfusion run --registration " + o.registration + "\ninput: " + o.input);
-
-  nlohmann::json report;
-  report["input"] = o.input;
-  report["frames"] = frames;
-  report["frames_bad"] = bad;
-  report["frames_lost"] = lost;
-  report["registration"] = o.registration;
-  report["camera"] = source->camera().describe();
-  report["camera_origin"] = source->camera_origin();
-  const double total_ms = times.total_ms("read") + times.total_ms("track");
-  report["fps"] = total_ms > 0 ? nlohmann::json(1000.0 * double(frames) / total_ms) : nlohmann::json(nullptr);
-  report["ms_per_frame"] = {{"read", times.mean_ms("read")}, {"track", times.mean_ms("track")},
-                            {"total", frames ? total_ms / double(frames) : 0.0}};
-  std::vector<std::string> outputs = {traj_path};
-
-  std::string metrics_md = "no ground truth: trajectory not evaluated\n";
-  const Trajectory& gt = source->ground_truth();
-  report["ate_rmse_m"] = nullptr;
-  report["rpe_trans_m_per_s"] = nullptr;
-  report["rpe_rot_deg_per_s"] = nullptr;
-  if (!gt.empty() && estimate.size() >= kMinAtePairs) {
-    const EvalResult eval = evaluate_trajectory(gt, estimate);
-    const TrajectoryMetrics m = eval.metrics();
-    report["metrics"] = metrics_to_json(m);
-    report["ate_rmse_m"] = m.ate_m.rmse;
-    if (m.rpe_trans_m_per_s) report["rpe_trans_m_per_s"] = m.rpe_trans_m_per_s->rmse;
-    if (m.rpe_rot_deg_per_s) report["rpe_rot_deg_per_s"] = m.rpe_rot_deg_per_s->rmse;
-    metrics_md = format_metrics_markdown(m);
-    const std::string plot_path = o.out + "/trajectory.png";
-    TrajectoryPlotOptions plot;
-    plot.title = "hashfusion run: " + o.input + " (" + o.registration + ")";
-    write_trajectory_plot(plot_path, gt, estimate, eval, plot);
-    outputs.push_back(plot_path);
-  }
-  report["config"] = {{"input", o.input},       {"out", o.out},   {"registration", o.registration},
-                      {"camera", o.camera},     {"max_frames", o.max_frames},
-                      {"synthetic_frames", o.synthetic_frames}, {"seed", o.seed}};
-
-  const std::string json_path = o.out + "/report.json";
-  const std::string md_path = o.out + "/report.md";
-  write_file_atomically(json_path, [&](std::ostream& out) { out << report.dump(2) << "\n"; });
-  std::ostringstream md;
-  md << "# hashfusion run\n\n"
-     << "| | |\n|---|---|\n"
-     << "| input | `" << o.input << "` (" << source->name() << ") |\n"
-     << "| camera | " << source->camera().describe() << " (" << source->camera_origin() << ") |\n"
-     << "| registration | " << o.registration << " |\n"
-     << "| frames | " << frames << " used, " << bad << " bad, " << lost << " lost |\n"
-     << "| ms per frame | read " << times.mean_ms("read") << ", track " << times.mean_ms("track") << " |\n\n"
-     << "## Trajectory error\n\n" << metrics_md;
-  write_file_atomically(md_path, [&](std::ostream& out) { out << md.str(); });
-  outputs.push_back(json_path);
-  outputs.push_back(md_path);
-
+  const slam::RunSummary summary = slam::summarize(result, pipeline, *source, o.input);
+  const std::vector<std::string> written = slam::write_run_outputs(o.out, result, summary, pipeline, *source);
   std::cout << "outputs:\n";
-  for (const auto& p : outputs) std::cout << "  " << std::filesystem::absolute(p).string() << "\n";
-  if (report["ate_rmse_m"].is_number()) std::cout << "ATE RMSE: " << report["ate_rmse_m"].get<double>() << " m\n";
+  for (const auto& p : written) std::cout << "  " << std::filesystem::absolute(p).string() << "\n";
+  std::cout << "frames: " << summary.frames << " (" << summary.frames_lost << " lost, " << summary.frames_bad
+            << " unreadable), " << summary.fps << " fps\n";
+  if (const auto ate = summary.ate_rmse_m()) std::cout << "ATE RMSE: " << *ate << " m\n";
 }
 
 }  // namespace
 
 void add_run_command(CLI::App& app) {
   auto opts = std::make_shared<RunOptions>();
-  CLI::App* cmd = app.add_subcommand("run", "Replay a dataset, track, and write trajectory, report and plots");
+  CLI::App* cmd = app.add_subcommand("run", "Track and fuse a dataset; write trajectory, mesh, report and plots");
   cmd->add_option("--input", opts->input, "synthetic:PRESET, a TUM RGB-D folder, or a 7-Scenes folder")
       ->capture_default_str();
   cmd->add_option("--out", opts->out, "output folder")->capture_default_str();
-  cmd->add_option("--registration", opts->registration, "groundtruth | identity (more with the registration issue)")
+  cmd->add_option("--registration", opts->registration, "registration method, or groundtruth (fusion only)")
+      ->capture_default_str();
+  cmd->add_option("--backend", opts->backend, "reduction backend: cpu | opencl")->capture_default_str();
+  cmd->add_option("--voxel-m", opts->voxel_m, "voxel size in metres")->check(CLI::Range(1e-4, 10.0))
       ->capture_default_str();
   cmd->add_option("--camera", opts->camera, "camera preset name or camera file (default: chosen per dataset)");
+  cmd->add_option("--config", opts->config_file, "JSON pipeline configuration (report.json's \"config\" form)");
   cmd->add_option("--max-frames", opts->max_frames, "stop after N frames (0 = all)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--synthetic-frames", opts->synthetic_frames, "frames of a synthetic: input")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   cmd->add_option("--seed", opts->seed, "noise seed of a synthetic: input")->capture_default_str();
-  cmd->callback([opts] { run(*opts); });
+  cmd->callback([opts, cmd] { run(*opts, *cmd); });
 }
 
 }  // namespace hf::apps

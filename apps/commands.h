@@ -11,5 +11,6 @@ namespace hf::apps {
 void add_generate_command(CLI::App& app);  // apps/cmd_generate.cpp
 void add_eval_command(CLI::App& app);      // apps/cmd_eval.cpp
 void add_run_command(CLI::App& app);       // apps/cmd_run.cpp
+void add_bench_command(CLI::App& app);     // apps/cmd_bench.cpp
 
 }  // namespace hf::apps

@@ -13,4 +13,7 @@ void add_eval_command(CLI::App& app) { app.add_subcommand("eval", "(not yet buil
 #ifdef HF_STUB_run
 void add_run_command(CLI::App& app) { app.add_subcommand("run", "(not yet built)"); }
 #endif
+#ifdef HF_STUB_bench
+void add_bench_command(CLI::App& app) { app.add_subcommand("bench", "(not yet built)"); }
+#endif
 }  // namespace hf::apps

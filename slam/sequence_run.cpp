@@ -1,0 +1,281 @@
+#include "slam/sequence_run.h"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/progress.h"
+#include "fusion/voxel_block_grid.h"
+#include "io/image_io.h"
+#include "io/ply.h"
+#include "slam/eval_plot.h"
+
+namespace hf::slam {
+
+long SequenceRun::frames_lost() const {
+  long n = 0;
+  for (const auto& f : frames) n += f.state == TrackState::lost;
+  return n;
+}
+
+Trajectory SequenceRun::estimate() const {
+  Trajectory t;
+  for (const auto& f : frames)
+    if (f.pose_valid) t.push_back({f.timestamp_s, f.T_world_camera});
+  return t;
+}
+
+SequenceRun run_sequence(FrameSource& source, Pipeline& pipeline, const RunControl& control) {
+  SequenceRun run;
+  const long available = long(source.size());
+  const long total = control.max_frames > 0 ? std::min(control.max_frames, available) : available;
+  std::unique_ptr<Progress> progress;
+  if (!control.progress_label.empty()) progress = std::make_unique<Progress>(control.progress_label, total);
+  const auto start = std::chrono::steady_clock::now();
+  long read = 0;
+  double busy_ms = 0.0;
+  while (read < total) {
+    if (control.stop && control.stop->load()) {
+      run.interrupted = true;
+      break;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    FrameRead fr = source.next();
+    const double read_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (fr.status == FrameStatus::end) break;
+    ++read;
+    if (fr.status == FrameStatus::bad_frame) {
+      run.bad_frames.push_back("frame " + std::to_string(fr.frame.index) + ": " + fr.message);
+      if (control.warn_bad_frames) std::cerr << "\nwarning: skipping frame " << fr.frame.index << ": " << fr.message << "\n";
+      if (progress) progress->update(read, "bad frame");
+      continue;
+    }
+    FrameResult r = pipeline.process(fr.frame);
+    r.ms.read = read_ms;
+    busy_ms += r.ms.total();
+    if (control.on_frame) control.on_frame(r);
+    if (progress) {
+      std::ostringstream status;
+      status << std::fixed << std::setprecision(1) << (busy_ms > 0 ? 1000.0 * double(run.frames.size() + 1) / busy_ms : 0.0)
+             << " fps " << to_string(r.state);
+      if (r.registration && r.state != TrackState::lost) status << " (" << hf::to_string(r.registration->status) << ")";
+      progress->update(read, status.str());
+    }
+    run.frames.push_back(std::move(r));
+  }
+  if (progress) progress->finish();
+  run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return run;
+}
+
+std::optional<double> RunSummary::ate_rmse_m() const {
+  if (!metrics) return std::nullopt;
+  return metrics->ate_m.rmse;
+}
+std::optional<double> RunSummary::rpe_trans_m_per_s() const {
+  if (!metrics || !metrics->rpe_trans_m_per_s) return std::nullopt;
+  return metrics->rpe_trans_m_per_s->rmse;
+}
+std::optional<double> RunSummary::rpe_rot_deg_per_s() const {
+  if (!metrics || !metrics->rpe_rot_deg_per_s) return std::nullopt;
+  return metrics->rpe_rot_deg_per_s->rmse;
+}
+
+namespace {
+
+// Evaluation needs ground truth and enough poses; anything else means "not evaluated", not an error.
+std::optional<EvalResult> try_evaluate(const Trajectory& gt, const Trajectory& est) {
+  if (gt.empty() || est.size() < kMinAtePairs) return std::nullopt;
+  try {
+    return evaluate_trajectory(gt, est);
+  } catch (const Error&) {
+    return std::nullopt;  // e.g. no pose pairs within the time tolerance
+  }
+}
+
+nlohmann::json opt(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
+
+}  // namespace
+
+RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const FrameSource& source,
+                     const std::string& input) {
+  RunSummary s;
+  s.input = input;
+  s.source_name = source.name();
+  s.registration = pipeline.config().registration;
+  s.backend = pipeline.config().backend;
+  s.voxel_m = pipeline.config().volume.voxel_m;
+  s.frames = long(run.frames.size());
+  s.frames_bad = long(run.bad_frames.size());
+  s.interrupted = run.interrupted;
+  StageMs sum;
+  for (const auto& f : run.frames) {
+    s.frames_lost += f.state == TrackState::lost;
+    if (f.registration && f.state != TrackState::lost) {
+      s.frames_degenerate += f.registration->status == RegistrationStatus::degenerate;
+      s.frames_poor += f.registration->status == RegistrationStatus::poor;
+    }
+    sum.read += f.ms.read;
+    sum.preprocess += f.ms.preprocess;
+    sum.track += f.ms.track;
+    sum.integrate += f.ms.integrate;
+    sum.raycast += f.ms.raycast;
+  }
+  if (s.frames > 0) {
+    const double n = double(s.frames);
+    s.mean_ms = {sum.read / n, sum.preprocess / n, sum.track / n, sum.integrate / n, sum.raycast / n};
+    s.fps = sum.total() > 0 ? 1000.0 * n / sum.total() : 0.0;
+  }
+  if (auto eval = try_evaluate(source.ground_truth(), run.estimate())) s.metrics = eval->metrics();
+  const auto& grid = pipeline.map();
+  s.blocks_allocated = grid.block_count() + pipeline.store().size();
+  s.memory_bytes = grid.memory_bytes();
+  const size_t voxels = grid.block_count() * size_t(HF_BLOCK_SIZE * HF_BLOCK_SIZE * HF_BLOCK_SIZE);
+  s.bytes_per_voxel = voxels ? double(grid.memory_bytes()) / double(voxels) : 0.0;
+  return s;
+}
+
+nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, const Pipeline& pipeline,
+                               const FrameSource& source) {
+  nlohmann::json j;
+  j["input"] = s.input;
+  j["source"] = s.source_name;
+  j["camera"] = source.camera().describe();
+  j["camera_origin"] = source.camera_origin();
+  j["registration"] = s.registration;
+  j["backend"] = s.backend;
+  j["voxel_m"] = s.voxel_m;
+  j["frames"] = s.frames;
+  j["frames_bad"] = s.frames_bad;
+  j["frames_lost"] = s.frames_lost;
+  j["frames_degenerate"] = s.frames_degenerate;
+  j["frames_poor"] = s.frames_poor;
+  j["interrupted"] = s.interrupted;
+  j["ate_rmse_m"] = opt(s.ate_rmse_m());
+  j["rpe_trans_m_per_s"] = opt(s.rpe_trans_m_per_s());
+  j["rpe_rot_deg_per_s"] = opt(s.rpe_rot_deg_per_s());
+  j["metrics"] = s.metrics ? metrics_to_json(*s.metrics) : nlohmann::json(nullptr);
+  j["fps"] = s.fps;
+  j["wall_s"] = run.wall_s;
+  j["ms_per_frame"] = {{"read", s.mean_ms.read},         {"preprocess", s.mean_ms.preprocess},
+                       {"track", s.mean_ms.track},       {"integrate", s.mean_ms.integrate},
+                       {"raycast", s.mean_ms.raycast},   {"total", s.mean_ms.total()}};
+  j["blocks_allocated"] = s.blocks_allocated;
+  j["bytes_per_voxel"] = s.bytes_per_voxel;
+  j["memory_bytes"] = s.memory_bytes;
+  j["config"] = config_to_json(pipeline.config());
+  j["bad_frames"] = run.bad_frames;
+  nlohmann::json frames = nlohmann::json::array();
+  for (const auto& f : run.frames) {
+    nlohmann::json fj = {{"index", f.index}, {"timestamp_s", f.timestamp_s}, {"state", to_string(f.state)},
+                         {"integrated", f.integrated}, {"ms", f.ms.total()}};
+    if (f.registration) {
+      fj["registration_status"] = hf::to_string(f.registration->status);
+      fj["inlier_ratio"] = f.registration->inlier_ratio;
+      fj["degenerate_dims"] = f.registration->degenerate_dims;
+    }
+    if (!f.message.empty()) fj["message"] = f.message;
+    frames.push_back(std::move(fj));
+  }
+  j["per_frame"] = std::move(frames);
+  return j;
+}
+
+namespace {
+
+std::string fmt(double v, int precision) {
+  std::ostringstream o;
+  o << std::fixed << std::setprecision(precision) << v;
+  return o.str();
+}
+
+std::string report_markdown(const RunSummary& s, const SequenceRun& run, const FrameSource& source) {
+  std::ostringstream md;
+  md << "# hashfusion run\n\n| | |\n|---|---|\n"
+     << "| input | `" << s.input << "` (" << s.source_name << ") |\n"
+     << "| camera | " << source.camera().describe() << " (" << source.camera_origin() << ") |\n"
+     << "| registration | " << s.registration << " (backend " << s.backend << ") |\n"
+     << "| voxel | " << fmt(s.voxel_m * 1000.0, 1) << " mm |\n"
+     << "| frames | " << s.frames << " processed, " << s.frames_bad << " unreadable, " << s.frames_lost << " lost, "
+     << s.frames_degenerate << " degenerate, " << s.frames_poor << " poor"
+     << (s.interrupted ? " (interrupted)" : "") << " |\n"
+     << "| speed | " << fmt(s.fps, 1) << " fps (" << fmt(s.mean_ms.total(), 1) << " ms per frame) |\n"
+     << "| map | " << s.blocks_allocated << " blocks, " << fmt(double(s.memory_bytes) / (1 << 20), 1) << " MiB, "
+     << fmt(s.bytes_per_voxel, 2) << " bytes per voxel |\n\n"
+     << "## Milliseconds per frame\n\n| read | preprocess | track | integrate | raycast | total |\n"
+     << "|---|---|---|---|---|---|\n| " << fmt(s.mean_ms.read, 1) << " | " << fmt(s.mean_ms.preprocess, 1) << " | "
+     << fmt(s.mean_ms.track, 1) << " | " << fmt(s.mean_ms.integrate, 1) << " | " << fmt(s.mean_ms.raycast, 1)
+     << " | " << fmt(s.mean_ms.total(), 1) << " |\n\n## Trajectory error\n\n";
+  if (s.metrics) {
+    md << format_metrics_markdown(*s.metrics);
+  } else {
+    md << "not evaluated (no ground truth, or fewer than " << kMinAtePairs << " tracked poses)\n";
+  }
+  size_t listed = 0;
+  std::ostringstream lost;
+  for (const auto& f : run.frames)
+    if (f.state == TrackState::lost && listed++ < 20) lost << "- frame " << f.index << ": " << f.message << "\n";
+  if (listed) md << "\n## Lost frames\n\n" << lost.str() << (listed > 20 ? "- ...\n" : "");
+  if (!run.bad_frames.empty()) {
+    md << "\n## Unreadable frames (skipped)\n\n";
+    for (const auto& b : run.bad_frames) md << "- " << b << "\n";
+  }
+  return md.str();
+}
+
+}  // namespace
+
+std::vector<std::string> write_run_outputs(const std::string& dir, const SequenceRun& run, const RunSummary& summary,
+                                           const Pipeline& pipeline, const FrameSource& source) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir)) throw Error(dir + ": cannot create output folder");
+  std::vector<std::string> written;
+
+  const std::string traj = dir + "/trajectory.txt";
+  write_tum_trajectory(traj, run.estimate(),
+                       "hashfusion run --registration " + summary.registration + "\ninput: " + summary.input);
+  written.push_back(traj);
+
+  const std::string mesh_path = dir + "/mesh.ply";
+  PlyWriteOptions ply;
+  ply.comment = "hashfusion " + summary.registration + " on " + summary.input;
+  write_ply(mesh_path, pipeline.extract_mesh(), ply);
+  written.push_back(mesh_path);
+
+  const std::string json_path = dir + "/report.json";
+  const nlohmann::json j = summary_to_json(summary, run, pipeline, source);
+  write_file_atomically(json_path, [&](std::ostream& out) { out << j.dump(2) << "\n"; });
+  written.push_back(json_path);
+
+  const std::string md_path = dir + "/report.md";
+  const std::string md = report_markdown(summary, run, source);
+  write_file_atomically(md_path, [&](std::ostream& out) { out << md; });
+  written.push_back(md_path);
+
+  if (const auto pose = pipeline.last_good_pose()) {
+    const std::string render_path = dir + "/render.png";
+    const ColorImage shaded = pipeline.render(*pose);
+    if (!shaded.empty()) {
+      write_color_png(render_path, shaded);
+      written.push_back(render_path);
+    }
+  }
+
+  if (auto eval = try_evaluate(source.ground_truth(), run.estimate())) {
+    const std::string plot = dir + "/trajectory.png";
+    TrajectoryPlotOptions o;
+    o.title = "hashfusion " + summary.registration + ": " + summary.input;
+    write_trajectory_plot(plot, source.ground_truth(), run.estimate(), *eval, o);
+    written.push_back(plot);
+  }
+  return written;
+}
+
+}  // namespace hf::slam

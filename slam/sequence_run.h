@@ -1,0 +1,81 @@
+// Running the pipeline over a whole frame source, and the summary both `hashfusion run` and `hashfusion bench`
+// report from.
+//
+//   SequenceRun run = run_sequence(*source, pipeline, control);
+//   RunSummary s = summarize(run, pipeline, *source);     // ATE/RPE when the source has ground truth
+//   write_run_outputs(dir, run, s, pipeline, *source);     // trajectory.txt, mesh.ply, report.*, *.png
+//
+// Unreadable frames (FrameStatus::bad_frame) are skipped with a one-line warning and counted; a frame the
+// pipeline rejects is counted as lost. `stop` (e.g. set by a SIGINT handler) ends the loop after the current
+// frame, and everything processed so far is still summarised and written.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/frame_source.h"
+#include "io/trajectory_io.h"
+#include "slam/eval.h"
+#include "slam/pipeline.h"
+
+namespace hf::slam {
+
+struct RunControl {
+  long max_frames = 0;                        // frames to read (ok and bad), 0 = all
+  const std::atomic<bool>* stop = nullptr;    // checked before each frame
+  std::string progress_label;                 // non-empty: a progress bar (core/progress.h) with fps and status
+  bool warn_bad_frames = true;                // print "warning: skipping frame ..." lines to stderr
+  std::function<void(const FrameResult&)> on_frame;  // called after each processed frame
+};
+
+struct SequenceRun {
+  std::vector<FrameResult> frames;        // processed (decoded) frames, in order; `read` ms filled in
+  std::vector<std::string> bad_frames;    // one line per unreadable frame, naming the file
+  bool interrupted = false;               // stopped by RunControl::stop
+  double wall_s = 0.0;                    // the whole loop
+
+  long frames_lost() const;
+  Trajectory estimate() const;            // poses of the frames with pose_valid, TUM time stamps
+};
+
+SequenceRun run_sequence(FrameSource& source, Pipeline& pipeline, const RunControl& control = {});
+
+// What a run is judged by. Trajectory errors are empty without ground truth or with fewer than kMinAtePairs poses.
+struct RunSummary {
+  std::string input;            // as given by the user (path or synthetic:PRESET)
+  std::string source_name;      // FrameSource::name()
+  std::string registration, backend;
+  double voxel_m = 0.0;
+  long frames = 0, frames_bad = 0, frames_lost = 0, frames_degenerate = 0, frames_poor = 0;
+  bool interrupted = false;
+  std::optional<TrajectoryMetrics> metrics;  // ATE and RPE (1 s delta)
+  double fps = 0.0;             // frames / sum of per-frame stage times
+  StageMs mean_ms;              // per stage, averaged over processed frames (total = their sum)
+  size_t blocks_allocated = 0;  // resident + streamed-out blocks at the end
+  double bytes_per_voxel = 0.0;
+  size_t memory_bytes = 0;      // the grid's memory (pool + hash)
+
+  std::optional<double> ate_rmse_m() const;
+  std::optional<double> rpe_trans_m_per_s() const;
+  std::optional<double> rpe_rot_deg_per_s() const;
+};
+
+RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const FrameSource& source,
+                     const std::string& input);
+
+// report.json: the fields of RunSummary (null where absent), "ms_per_frame" {read, preprocess, track, integrate,
+// raycast, total}, "config" (config_to_json), per-frame states, and the camera.
+nlohmann::json summary_to_json(const RunSummary& summary, const SequenceRun& run, const Pipeline& pipeline,
+                               const FrameSource& source);
+
+// Writes into `dir` (created if needed), each file atomically: trajectory.txt, mesh.ply (binary, coloured),
+// report.json, report.md, render.png (shaded model from the last good pose) and trajectory.png (with ground
+// truth). Returns the paths written, in that order.
+std::vector<std::string> write_run_outputs(const std::string& dir, const SequenceRun& run, const RunSummary& summary,
+                                           const Pipeline& pipeline, const FrameSource& source);
+
+}  // namespace hf::slam
