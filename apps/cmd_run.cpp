@@ -29,6 +29,7 @@ struct RunOptions {
   std::string camera;
   std::string config_file;
   double voxel_m = 0.01;
+  int tracking_level = -1;  // -1: the configuration's
   long max_frames = 0;  // 0 = all
   int synthetic_frames = 90;
   std::uint64_t seed = 0;
@@ -53,6 +54,7 @@ slam::PipelineConfig make_config(const RunOptions& o, const CLI::App& cmd) {
   if (o.config_file.empty() || cmd.count("--registration")) c.registration = o.registration;
   if (o.config_file.empty() || cmd.count("--backend")) c.backend = o.backend;
   if (o.config_file.empty() || cmd.count("--voxel-m")) c.volume.voxel_m = o.voxel_m;
+  if (o.tracking_level >= 0) c.tracking_level = o.tracking_level;
   // A method change on the command line must not inherit another method's options from the file.
   if (cmd.count("--registration") && c.registration_options && !o.config_file.empty()) c.registration_options.reset();
   c.validate();
@@ -109,6 +111,9 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--backend", opts->backend, "reduction backend: cpu | opencl")->capture_default_str();
   cmd->add_option("--voxel-m", opts->voxel_m, "voxel size in metres")->check(CLI::Range(1e-4, 10.0))
       ->capture_default_str();
+  cmd->add_option("--tracking-level", opts->tracking_level,
+                  "pyramid level tracking starts at (0 full, 1 half resolution); default: the configuration's")
+      ->check(CLI::Range(0, 2));
   cmd->add_option("--camera", opts->camera, "camera preset name or camera file (default: chosen per dataset)");
   cmd->add_option("--config", opts->config_file, "JSON pipeline configuration (report.json's \"config\" form)");
   cmd->add_option("--max-frames", opts->max_frames, "stop after N frames (0 = all)")->check(CLI::NonNegativeNumber);

@@ -5,6 +5,8 @@
 //   build/release/bench/bench_registration                      # Google Benchmark timings (synthetic pair)
 //   build/release/bench/bench_registration --accuracy [--max-pairs N] [--pcl-pairs N]
 //                                                               # the accuracy tables (markdown on stdout)
+//   build/release/bench/bench_registration --lambda-sweep [--max-pairs N]
+//                                                               # combined's rgb_weight on the TUM pairs
 //
 // Methods and backends come from the registries (registration_names(), backend_names()); a backend that cannot
 // be created here (e.g. opencl without a platform) is reported and skipped. Results: bench/results/registration.md.
@@ -140,6 +142,7 @@ struct Row {
   std::string method, backend;
   std::vector<double> ms, t_mm, r_deg, iterations;
   std::map<std::string, int> statuses;
+  std::vector<double> eigen_ratio;  // smallest / largest balanced eigenvalue of each result
 };
 
 void print_row(const Row& r) {
@@ -168,7 +171,7 @@ void accuracy_table(const PairSet& set, int pcl_pairs) {
   std::printf("| method | backend | pairs | ms / registration | iterations | trans. error mean / median (mm) | "
               "rot. error mean / median (deg) | status |\n|---|---|---|---|---|---|---|---|\n");
   {
-    Row identity{"(identity: no motion estimated)", "-", {}, {}, {}, {}, {}};
+    Row identity{"(identity: no motion estimated)", "-", {}, {}, {}, {}, {}, {}};
     for (const Pair& p : set.pairs) {
       const Errors e = error_of(SE3(), p.T_ref_cur_true);
       identity.t_mm.push_back(e.t_mm);
@@ -180,7 +183,7 @@ void accuracy_table(const PairSet& set, int pcl_pairs) {
   for (const std::string& method : registration_names()) {
     for (const std::string& backend : usable_backends()) {
       std::unique_ptr<Registration> reg = make_registration(method, backend);
-      Row row{method, backend, {}, {}, {}, {}, {}};
+      Row row{method, backend, {}, {}, {}, {}, {}, {}};
       for (const Pair& p : set.pairs) {
         const auto start = std::chrono::steady_clock::now();
         const RegistrationResult res = reg->align(p.cur, p.ref, SE3());
@@ -199,7 +202,7 @@ void accuracy_table(const PairSet& set, int pcl_pairs) {
   const int n_pcl = std::min<int>(pcl_pairs, int(set.pairs.size()));
   for (const char* method : {"gicp", "ndt"}) {
     Row row{std::string("PCL ") + (std::strcmp(method, "gicp") == 0 ? "GICP" : "NDT") + " (reference)",
-            "PCL, 1 thread", {}, {}, {}, {}, {}};
+            "PCL, 1 thread", {}, {}, {}, {}, {}, {}};
     int points = 0;
     for (int i = 0; i < n_pcl; ++i) {
       const Pair& p = set.pairs[size_t(i)];
@@ -232,6 +235,80 @@ int run_accuracy(int max_pairs, int pcl_pairs) {
       continue;
     }
     accuracy_table(tum_pairs(folder, max_pairs), pcl_pairs);
+  }
+  return 0;
+}
+
+// ---- Choice of lambda (rgb_weight of combined, eq. 48) on the real TUM sequences -------------------------------
+
+// For every consecutive pair with ground truth of each TUM folder (frames streamed, one pyramid pair in memory),
+// combined with each lambda (and icp as the lambda = 0 reference): error statistics per lambda.
+int run_lambda_sweep(int max_pairs) {
+  const std::vector<float> lambdas = {0.0f, 0.01f, 0.02f, 0.05f, 0.1f, 0.2f, 0.5f, 1.0f};
+  std::printf("## lambda sweep: combined (cpu) frame to frame, identity guess, 640x480\n");
+  for (const char* name : {"tum_fr1_rpy_first150", "tum_fr1_desk_9frames"}) {
+    const std::string folder = std::string(HF_SHARED_DIR) + "/data/" + name;
+    if (!std::filesystem::exists(folder)) {
+      std::printf("\n(%s missing: skipped)\n", folder.c_str());
+      continue;
+    }
+    std::vector<std::unique_ptr<Registration>> regs;
+    std::vector<Row> rows;
+    for (const float lambda : lambdas) {
+      RegistrationOptions o = default_registration_options("combined");
+      o.rgb_weight = lambda;
+      regs.push_back(make_registration("combined", o, make_backend("cpu")));
+      char label[32];
+      std::snprintf(label, sizeof(label), "%g", double(lambda));
+      rows.push_back(Row{label, "cpu", {}, {}, {}, {}, {}, {}});
+    }
+    DatasetOptions options;
+    options.prefetch_frames = 0;
+    std::unique_ptr<FrameSource> source = open_dataset(folder, options);
+    std::optional<FramePyramid> prev;
+    SE3 T_w_prev;
+    int pairs = 0;
+    while (pairs < max_pairs) {
+      FrameRead read = source->next();
+      if (read.status == FrameStatus::end) break;
+      if (read.status != FrameStatus::ok || !read.frame.T_world_camera_gt) {
+        prev.reset();
+        continue;
+      }
+      FramePyramid cur = build_frame_pyramid(read.frame.depth, &read.frame.color, source->camera());
+      const SE3 T_w_cur = *read.frame.T_world_camera_gt;
+      if (prev) {
+        const SE3 T_true = T_w_prev.inverse() * T_w_cur;
+        for (size_t k = 0; k < regs.size(); ++k) {
+          const auto start = std::chrono::steady_clock::now();
+          const RegistrationResult res = regs[k]->align(cur, *prev, SE3());
+          rows[k].ms.push_back(elapsed_ms(start));
+          const Errors e = error_of(res.T_ref_cur, T_true);
+          rows[k].t_mm.push_back(e.t_mm);
+          rows[k].r_deg.push_back(e.r_deg);
+          rows[k].iterations.push_back(
+              double(std::accumulate(res.iterations_per_level.begin(), res.iterations_per_level.end(), 0)));
+          ++rows[k].statuses[to_string(res.status)];
+          rows[k].eigen_ratio.push_back(res.eigenvalues(5) > 0.0 ? res.eigenvalues(0) / res.eigenvalues(5) : 0.0);
+        }
+        ++pairs;
+      }
+      prev = std::move(cur);
+      T_w_prev = T_w_cur;
+    }
+    std::printf("\n### %s: %d pairs\n\n", name, pairs);
+    std::printf("| lambda | backend | pairs | ms / registration | iterations | trans. error mean / median (mm) | "
+                "rot. error mean / median (deg) | status |\n|---|---|---|---|---|---|---|---|\n");
+    for (const Row& r : rows) print_row(r);
+    std::printf("\nSmallest / largest balanced eigenvalue (the degeneracy test's ratio), min / 5th percentile / "
+                "median over the pairs:\n\n");
+    for (const Row& r : rows) {
+      std::vector<double> v = r.eigen_ratio;
+      std::sort(v.begin(), v.end());
+      if (v.empty()) continue;
+      std::printf("- lambda %s: %.2g / %.2g / %.2g\n", r.method.c_str(), v.front(), v[v.size() / 20], median(v));
+    }
+    std::fflush(stdout);
   }
   return 0;
 }
@@ -365,12 +442,14 @@ void register_benchmarks() {
 }  // namespace hf
 
 int main(int argc, char** argv) {
-  bool accuracy = false;
+  bool accuracy = false, lambda_sweep = false;
   int max_pairs = 1000, pcl_pairs = 30;
   std::vector<char*> rest;
   for (int i = 0; i < argc; ++i) {
     if (std::strcmp(argv[i], "--accuracy") == 0) {
       accuracy = true;
+    } else if (std::strcmp(argv[i], "--lambda-sweep") == 0) {
+      lambda_sweep = true;
     } else if (std::strcmp(argv[i], "--max-pairs") == 0 && i + 1 < argc) {
       max_pairs = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--pcl-pairs") == 0 && i + 1 < argc) {
@@ -381,6 +460,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (accuracy) return hf::run_accuracy(max_pairs, pcl_pairs);
+    if (lambda_sweep) return hf::run_lambda_sweep(max_pairs);
     int n = int(rest.size());
     hf::register_benchmarks();
     benchmark::Initialize(&n, rest.data());

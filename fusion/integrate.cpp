@@ -220,11 +220,17 @@ IntegrateStats integrate(VoxelBlockGrid& grid, const DepthImage& depth, const Co
       for (int z = 0; z < HF_BLOCK_SIZE; ++z) {
         const Eigen::Vector3f pz = p0 + float(z) * step_z;
         for (int y = 0; y < HF_BLOCK_SIZE; ++y) {
+          // The shared kernel in two passes over the row: the projections (branch-free, vectorised), then the
+          // updates of the voxels that land in the image. Same arithmetic as hf_integrate_voxel.
+          float px[HF_BLOCK_SIZE], py[HF_BLOCK_SIZE], pz_cam[HF_BLOCK_SIZE];
+          int pixel[HF_BLOCK_SIZE];
           Eigen::Vector3f p = pz + float(y) * step_y;
+          for (int x = 0; x < HF_BLOCK_SIZE; ++x, p += step_x) px[x] = p.x(), py[x] = p.y(), pz_cam[x] = p.z();
+          for (int x = 0; x < HF_BLOCK_SIZE; ++x) pixel[x] = hf_voxel_pixel(px[x], py[x], pz_cam[x], K);
           Voxel* row = voxels + hf_voxel_index(0, y, z);
-          for (int x = 0; x < HF_BLOCK_SIZE; ++x, p += step_x) {
-            n_updated += hf_integrate_voxel(row + x, hf_make_float4(p.x(), p.y(), p.z(), 1.0f), depth_px, rgb, K, mu,
-                                            max_weight, w);
+          for (int x = 0; x < HF_BLOCK_SIZE; ++x) {
+            if (pixel[x] >= 0)
+              n_updated += hf_integrate_voxel_at(row + x, pz_cam[x], pixel[x], depth_px, rgb, mu, max_weight, w);
           }
         }
       }

@@ -5,9 +5,12 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <tuple>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "core/error.h"
-#include "core/parallel.h"
 #include "fusion/kernels/raycast_kernels.h"
 
 namespace hf::fusion {
@@ -23,9 +26,10 @@ BlockLookup::BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBloc
   const size_t n = std::bit_ceil(std::max<size_t>(16, 2 * blocks.size()));
   slots_.assign(n, Slot{});
   mask_ = n - 1;
+  shift_ = 64 - std::countr_zero(n);
   for (const auto& [c, block] : blocks) {
     if (block == nullptr) throw Error("BlockLookup: null block pointer");
-    size_t i = BlockCoordHash{}(c)&mask_;
+    size_t i = slot_of(c.x, c.y, c.z);
     while (slots_[i].block != nullptr && !(slots_[i].x == c.x && slots_[i].y == c.y && slots_[i].z == c.z))
       i = (i + 1) & mask_;
     if (slots_[i].block != nullptr) {
@@ -33,6 +37,26 @@ BlockLookup::BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBloc
       continue;
     }
     slots_[i] = Slot{c.x, c.y, c.z, block};
+  }
+  // Regions: at most as many as blocks, usually far fewer; a table 2^extra times smaller than slots_ takes the
+  // same hash's top bits.
+  std::vector<Slot> occupied;
+  for (const Slot& s : slots_)
+    if (s.block != nullptr) occupied.push_back(Slot{s.x >> kRegionShift, s.y >> kRegionShift, s.z >> kRegionShift, s.block});
+  std::sort(occupied.begin(), occupied.end(), [](const Slot& a, const Slot& b) {
+    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+  });
+  occupied.erase(std::unique(occupied.begin(), occupied.end(),
+                             [](const Slot& a, const Slot& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }),
+                 occupied.end());
+  const size_t nr = std::bit_ceil(std::max<size_t>(16, 2 * occupied.size()));
+  region_extra_shift_ = std::countr_zero(n) - std::countr_zero(nr);
+  regions_.assign(nr, Slot{});
+  region_mask_ = nr - 1;
+  for (const Slot& r : occupied) {
+    size_t i = slot_of(r.x, r.y, r.z) >> region_extra_shift_;
+    while (regions_[i].block != nullptr) i = (i + 1) & region_mask_;
+    regions_[i] = r;
   }
 }
 
@@ -141,33 +165,64 @@ struct Hit {
 
 // Marches one ray; see raycast.h for the scheme. o and d are in continuous voxel coordinates (d has length 1 voxel
 // per voxel_m metres, i.e. d = unit direction / voxel_m) so block and voxel indices come without divisions.
-bool march(VolumeSampler& sampler, const BlockLookup& lookup, const Eigen::Vector3f& o_vox,
-           const Eigen::Vector3f& d_vox, float t_min, float t_max, float mu_m, float step_fraction, float min_step_m,
-           float voxel_m, Hit* hit) {
+//
+// Each step first reads the voxel nearest to the ray point (one load from the cached block): an unobserved one is
+// a corner of the trilinear sample, which is then invalid without computing it; an observed one far in front of
+// the surface (sdf > kFarSdf) bounds the distance to the surface by sdf * mu - sqrt(3)/2 voxel (the SDF is a
+// distance, the nearest voxel centre is at most sqrt(3)/2 voxel away), so the ray advances by step_fraction of that
+// bound without interpolating. Only near the surface are trilinear samples taken; when a negative sample follows
+// such a cheap step, the ray goes back to where that step started and walks the stretch again with trilinear
+// samples only, so the bracket it refines is the one the all-trilinear march would have found.
+bool march(VolumeSampler& sampler, const Eigen::Vector3f& o_vox, const Eigen::Vector3f& d_vox, float t_min,
+           float t_max, float mu_m, float step_fraction, float min_step_m, float voxel_m, Hit* hit) {
+  constexpr float kFarSdf = 0.5f;
+  const float far_margin_m = 0.8660254f * voxel_m;
+  const bool cheap_steps = kFarSdf * mu_m - far_margin_m > min_step_m;
   // Block b holds continuous voxel coordinates [8 b - 0.5, 8 b + 7.5).
   const Eigen::Vector3f inv_d(d_vox.x() != 0.0f ? 1.0f / d_vox.x() : std::numeric_limits<float>::infinity(),
                               d_vox.y() != 0.0f ? 1.0f / d_vox.y() : std::numeric_limits<float>::infinity(),
                               d_vox.z() != 0.0f ? 1.0f / d_vox.z() : std::numeric_limits<float>::infinity());
   const float skip_eps = 1e-3f * voxel_m;
   float t = t_min;
-  bool have_prev = false;  // a valid sample with sdf > 0 precedes t
+  bool have_prev = false;    // a sample with sdf > 0 precedes t
+  bool prev_exact = false;   // ... and it was trilinear (else the nearest voxel's value)
   float t_prev = 0.0f, s_prev = 0.0f;
+  float fine_until = -1.0f;  // no cheap steps before this t (set when a bracket is walked again)
   while (t < t_max) {
     const Eigen::Vector3f p = o_vox + t * d_vox;
-    const Eigen::Vector3f q = (p.array() + 0.5f) * (1.0f / HF_BLOCK_SIZE);
-    const float fbx = std::floor(q.x()), fby = std::floor(q.y()), fbz = std::floor(q.z());
-    if (!(std::fabs(fbx) < 1e8f && std::fabs(fby) < 1e8f && std::fabs(fbz) < 1e8f)) return false;
-    if (lookup.find(int(fbx), int(fby), int(fbz)) == nullptr) {
-      // Jump to where the ray leaves this block.
+    const float fi = std::floor(p.x() + 0.5f), fj = std::floor(p.y() + 0.5f), fk = std::floor(p.z() + 0.5f);
+    if (!(std::fabs(fi) < 1e8f && std::fabs(fj) < 1e8f && std::fabs(fk) < 1e8f)) return false;
+    const int i = int(fi), j = int(fj), k = int(fk);
+    const VoxelBlock* block = sampler.block(i >> 3, j >> 3, k >> 3);
+    if (block == nullptr) {
+      // Jump to where the ray leaves this block, or its whole region when that holds no block at all.
+      constexpr int kRegionShift = BlockLookup::kRegionShift + 3;  // region size in voxels, log2
+      const bool region_empty = !sampler.region_occupied(i >> kRegionShift, j >> kRegionShift, k >> kRegionShift);
+      const int shift = region_empty ? kRegionShift : 3;
+      const float size = float(1 << shift);
       float t_exit = std::numeric_limits<float>::infinity();
-      const float lo[3] = {fbx * HF_BLOCK_SIZE - 0.5f, fby * HF_BLOCK_SIZE - 0.5f, fbz * HF_BLOCK_SIZE - 0.5f};
+      const float lo[3] = {float(i >> shift) * size - 0.5f, float(j >> shift) * size - 0.5f,
+                           float(k >> shift) * size - 0.5f};
       for (int a = 0; a < 3; ++a) {
         if (d_vox[a] == 0.0f) continue;
-        const float plane = d_vox[a] > 0.0f ? lo[a] + HF_BLOCK_SIZE : lo[a];
+        const float plane = d_vox[a] > 0.0f ? lo[a] + size : lo[a];
         t_exit = std::min(t_exit, (plane - o_vox[a]) * inv_d[a]);
       }
       t = std::max(t_exit, t) + skip_eps;
       have_prev = false;
+      continue;
+    }
+    const Voxel& nearest = block->voxels[hf_voxel_index(i & 7, j & 7, k & 7)];
+    if (!sampler.observed(&nearest)) {
+      t += voxel_m;  // a corner of the trilinear sample is unobserved: invalid sample
+      have_prev = false;
+      continue;
+    }
+    if (cheap_steps && t > fine_until && nearest.sdf > hf_int16(kFarSdf * HF_SDF_SCALE)) {
+      const float s_near = hf_voxel_sdf(nearest);
+      have_prev = true, prev_exact = false;
+      t_prev = t, s_prev = s_near;
+      t += std::max(step_fraction * (s_near * mu_m - far_margin_m), min_step_m);
       continue;
     }
     float s = 0.0f;
@@ -177,6 +232,13 @@ bool march(VolumeSampler& sampler, const BlockLookup& lookup, const Eigen::Vecto
       continue;
     }
     if (s < 0.0f) {
+      if (have_prev && !prev_exact) {
+        // The + end came from a cheap step: go back there and walk the bracket with trilinear samples only.
+        fine_until = t;
+        t = t_prev;
+        have_prev = false;
+        continue;
+      }
       if (have_prev) {
         // + to - : refine on the bracket [t_prev, t] (linear interpolation, then regula falsi).
         float ta = t_prev, sa = s_prev, tb = t, sb = s;
@@ -201,7 +263,7 @@ bool march(VolumeSampler& sampler, const BlockLookup& lookup, const Eigen::Vecto
       t += hf_raycast_step(s, mu_m, step_fraction, min_step_m);
       continue;
     }
-    have_prev = true;
+    have_prev = true, prev_exact = true;
     t_prev = t, s_prev = s;
     t += hf_raycast_step(s, mu_m, step_fraction, min_step_m);
   }
@@ -234,11 +296,11 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
   const Eigen::Vector3f o_vox = (T_world_camera.translation() / voxel_m).cast<float>() - Eigen::Vector3f::Constant(0.5f);
   const float step_fraction = float(options.step_fraction);
   const float min_step_m = float(options.min_step_vox * voxel_m);
-  std::vector<int> row_hits(H, 0);
 
-  // Depth range per 8 x 8 pixel tile from the projected corners of every allocated block (InfiniTAM's range
-  // image): a ray can only hit inside an allocated block, so it starts at the nearest block its tile sees and
-  // stops after the farthest; tiles no block covers are not marched at all.
+  // Depth range per 8 x 8 pixel tile (InfiniTAM's range image): a ray can only hit inside an allocated block, so
+  // it starts at the nearest block its tile sees and stops after the farthest; tiles no block covers are not
+  // marched at all. Each block is clipped against the near plane before it is projected: a block straddling the
+  // near plane projects to a bounded region (its part in front of the plane), so it cannot widen every tile.
   constexpr int kTile = 8;
   const int TW = (W + kTile - 1) / kTile, TH = (H + kTile - 1) / kTile;
   std::vector<float> tile_near(size_t(TW) * TH, std::numeric_limits<float>::infinity());
@@ -247,93 +309,123 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
     const SE3 T_camera_world = T_world_camera.inverse();
     const Eigen::Matrix3d Rcw = T_camera_world.rotation();
     const Eigen::Vector3d tcw = T_camera_world.translation();
-    const double B = grid.params().block_m(), near_m = options.min_depth_m;
+    const double B = grid.params().block_m(), near_m = options.min_depth_m, far_m = options.max_depth_m;
+    const Eigen::Vector3d ex = Rcw.col(0) * B, ey = Rcw.col(1) * B, ez = Rcw.col(2) * B;
     for (const auto& [c, block] : grid.blocks()) {
       (void)block;
+      Eigen::Vector3d p[8];
+      const Eigen::Vector3d p0 = Rcw * (Eigen::Vector3d(c.x, c.y, c.z) * B) + tcw;
       double zmin = std::numeric_limits<double>::infinity(), zmax = -zmin;
-      double umin = zmin, umax = -zmin, vmin = zmin, vmax = -zmin;
-      bool behind = false;
       for (int k = 0; k < 8; ++k) {
-        const Eigen::Vector3d p = Rcw * (Eigen::Vector3d(c.x + (k & 1), c.y + ((k >> 1) & 1), c.z + (k >> 2)) * B) + tcw;
-        zmin = std::min(zmin, p.z());
-        zmax = std::max(zmax, p.z());
-        if (p.z() < near_m) {
-          behind = true;
-          continue;
+        p[k] = p0 + double(k & 1) * ex + double((k >> 1) & 1) * ey + double(k >> 2) * ez;
+        zmin = std::min(zmin, p[k].z());
+        zmax = std::max(zmax, p[k].z());
+      }
+      if (zmax < near_m || zmin > far_m) continue;
+      // Bounding box of the projection of the block's part in front of the near plane: the projections of its
+      // corners in front and of the points where its edges cross the plane (a convex polytope in front of the
+      // camera projects to the convex hull of its vertices' projections).
+      double umin = std::numeric_limits<double>::infinity(), umax = -umin, vmin = umin, vmax = -umin;
+      auto add = [&](const Eigen::Vector3d& q) {
+        const double u = camera.fx * q.x() / q.z() + camera.cx, v = camera.fy * q.y() / q.z() + camera.cy;
+        umin = std::min(umin, u), umax = std::max(umax, u);
+        vmin = std::min(vmin, v), vmax = std::max(vmax, v);
+      };
+      for (int k = 0; k < 8; ++k) {
+        if (p[k].z() >= near_m) add(p[k]);
+        for (int axis = 0; axis < 3; ++axis) {
+          const int j = k | (1 << axis);
+          if (j == k) continue;  // each edge once, from its lower corner
+          const double za = p[k].z() - near_m, zb = p[j].z() - near_m;
+          if ((za < 0.0) != (zb < 0.0)) {
+            Eigen::Vector3d q = p[k] + (za / (za - zb)) * (p[j] - p[k]);
+            q.z() = near_m;
+            add(q);
+          }
         }
-        const Eigen::Vector2d uv = camera.project(p);
-        umin = std::min(umin, uv.x()), umax = std::max(umax, uv.x());
-        vmin = std::min(vmin, uv.y()), vmax = std::max(vmax, uv.y());
       }
-      if (zmax < near_m || zmin > options.max_depth_m) continue;
-      int tx0 = 0, tx1 = TW - 1, ty0 = 0, ty1 = TH - 1;
-      if (!behind) {  // a block reaching behind the near plane may cover any tile
-        if (umax < -0.5 || vmax < -0.5 || umin > W - 0.5 || vmin > H - 0.5) continue;
-        tx0 = std::max(0, int(std::floor(umin + 0.5)) / kTile), tx1 = std::min(TW - 1, int(std::floor(umax + 0.5)) / kTile);
-        ty0 = std::max(0, int(std::floor(vmin + 0.5)) / kTile), ty1 = std::min(TH - 1, int(std::floor(vmax + 0.5)) / kTile);
-      }
+      // Pixel x's ray passes through u = x; one pixel of slack covers rounding.
+      if (umax < -1.0 || vmax < -1.0 || umin > W || vmin > H) continue;
+      const int tx0 = std::max(0, int(std::floor(umin - 1.0)) / kTile);
+      const int tx1 = std::min(TW - 1, int(std::min(std::ceil(umax + 1.0), double(W))) / kTile);
+      const int ty0 = std::max(0, int(std::floor(vmin - 1.0)) / kTile);
+      const int ty1 = std::min(TH - 1, int(std::min(std::ceil(vmax + 1.0), double(H))) / kTile);
+      const float zn = float(std::max(zmin, near_m)), zf = float(zmax);
       for (int ty = ty0; ty <= ty1; ++ty)
         for (int tx = tx0; tx <= tx1; ++tx) {
           float& n = tile_near[size_t(ty) * TW + tx];
           float& f = tile_far[size_t(ty) * TW + tx];
-          n = std::min(n, float(zmin));
-          f = std::max(f, float(zmax));
+          n = std::min(n, zn);
+          f = std::max(f, zf);
         }
     }
   }
 
-  parallel_for_rows(H, [&](int y) {
-    VolumeSampler sampler(lookup, options.min_weight);
-    int hits = 0;
-    for (int x = 0; x < W; ++x) {
-      const Eigen::Vector3f d_cam(float((x - camera.cx) / camera.fx), float((y - camera.cy) / camera.fy), 1.0f);
-      const float len = d_cam.norm();
-      const Eigen::Vector3f u_world = R * (d_cam / len);
-      Hit hit;
-      const size_t tile = size_t(y / kTile) * TW + size_t(x / kTile);
-      // One voxel of slack on both sides covers float rounding of the corner projections.
-      const float z0 = std::max(float(options.min_depth_m), tile_near[tile] - float(voxel_m));
-      const float z1 = std::min(float(options.max_depth_m), tile_far[tile] + float(voxel_m));
-      const bool found = z0 < z1 && march(sampler, lookup, o_vox, u_world / float(voxel_m), z0 * len, z1 * len, mu_m,
-                                          step_fraction, min_step_m, float(voxel_m), &hit);
-      if (!found) {
-        out->depth(x, y) = 0.0f;
-        out->vertices(x, y) = hf_invalid4();
-        out->normals(x, y) = hf_invalid4();
-        out->color(x, y) = Rgb8{};
-        if (options.shade) out->shaded(x, y) = Rgb8{};
-        continue;
-      }
-      ++hits;
-      const float z = hit.t / len;
-      out->depth(x, y) = z;
-      out->vertices(x, y) = hf_make_float4(d_cam.x() * z, d_cam.y() * z, z, 1.0f);
-      float s = 0.0f;
-      Eigen::Vector3f rgb(0.0f, 0.0f, 0.0f);
-      if (sampler.sdf_color(hit.p_vox, &s, &rgb)) {
-        auto to8 = [](float c) { return std::uint8_t(std::clamp(c + 0.5f, 0.0f, 255.0f)); };
-        out->color(x, y) = Rgb8{to8(rgb.x()), to8(rgb.y()), to8(rgb.z())};
-      } else {
-        out->color(x, y) = Rgb8{};
-      }
-      Eigen::Vector3f n_world;
-      if (sampler.normal(hit.p_vox, &n_world)) {
-        const Eigen::Vector3f n = R_cw * n_world;
-        out->normals(x, y) = hf_make_float4(n.x(), n.y(), n.z(), 1.0f);
-        if (options.shade) {
-          const hf_float4 to_cam = hf_make_float4(-d_cam.x() / len, -d_cam.y() / len, -1.0f / len, 0.0f);
-          const auto g = std::uint8_t(255.0f * hf_headlight_shade(out->normals(x, y), to_cam) + 0.5f);
-          out->shaded(x, y) = Rgb8{g, g, g};
-        }
-      } else {
-        out->normals(x, y) = hf_invalid4();
-        if (options.shade) out->shaded(x, y) = Rgb8{40, 40, 40};
-      }
+  // One pixel: march its ray, then fill the outputs; true at a hit.
+  auto cast_pixel = [&](VolumeSampler& sampler, int x, int y) -> bool {
+    const Eigen::Vector3f d_cam(float((x - camera.cx) / camera.fx), float((y - camera.cy) / camera.fy), 1.0f);
+    const float len = d_cam.norm();
+    const Eigen::Vector3f u_world = R * (d_cam / len);
+    Hit hit;
+    const size_t tile = size_t(y / kTile) * TW + size_t(x / kTile);
+    // One voxel of slack on both sides covers float rounding of the corner projections.
+    const float z0 = std::max(float(options.min_depth_m), tile_near[tile] - float(voxel_m));
+    const float z1 = std::min(float(options.max_depth_m), tile_far[tile] + float(voxel_m));
+    const bool found = z0 < z1 && march(sampler, o_vox, u_world / float(voxel_m), z0 * len, z1 * len, mu_m,
+                                        step_fraction, min_step_m, float(voxel_m), &hit);
+    if (!found) {
+      out->depth(x, y) = 0.0f;
+      out->vertices(x, y) = hf_invalid4();
+      out->normals(x, y) = hf_invalid4();
+      out->color(x, y) = Rgb8{};
+      if (options.shade) out->shaded(x, y) = Rgb8{};
+      return false;
     }
-    row_hits[y] = hits;
+    const float z = hit.t / len;
+    out->depth(x, y) = z;
+    out->vertices(x, y) = hf_make_float4(d_cam.x() * z, d_cam.y() * z, z, 1.0f);
+    float s = 0.0f;
+    Eigen::Vector3f rgb(0.0f, 0.0f, 0.0f);
+    if (sampler.sdf_color(hit.p_vox, &s, &rgb)) {
+      auto to8 = [](float c) { return std::uint8_t(std::clamp(c + 0.5f, 0.0f, 255.0f)); };
+      out->color(x, y) = Rgb8{to8(rgb.x()), to8(rgb.y()), to8(rgb.z())};
+    } else {
+      out->color(x, y) = Rgb8{};
+    }
+    Eigen::Vector3f n_world;
+    if (sampler.normal(hit.p_vox, &n_world)) {
+      const Eigen::Vector3f n = R_cw * n_world;
+      out->normals(x, y) = hf_make_float4(n.x(), n.y(), n.z(), 1.0f);
+      if (options.shade) {
+        const hf_float4 to_cam = hf_make_float4(-d_cam.x() / len, -d_cam.y() / len, -1.0f / len, 0.0f);
+        const auto g = std::uint8_t(255.0f * hf_headlight_shade(out->normals(x, y), to_cam) + 0.5f);
+        out->shaded(x, y) = Rgb8{g, g, g};
+      }
+    } else {
+      out->normals(x, y) = hf_invalid4();
+      if (options.shade) out->shaded(x, y) = Rgb8{40, 40, 40};
+    }
+    return true;
+  };
+
+  // Parallel over 16 x 16 pixel tiles rather than rows: neighbouring rays read the same voxels and find them still
+  // in cache (the march is bound by memory latency, not arithmetic). Each pixel is written once: deterministic.
+  constexpr int kWork = 16;
+  const int WX = (W + kWork - 1) / kWork, WY = (H + kWork - 1) / kWork;
+  std::vector<int> tile_hits(size_t(WX) * WY, 0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, WX * WY), [&](const tbb::blocked_range<int>& work) {
+    VolumeSampler sampler(lookup, options.min_weight);
+    for (int wi = work.begin(); wi != work.end(); ++wi) {
+      const int x0 = (wi % WX) * kWork, y0 = (wi / WX) * kWork;
+      const int x1 = std::min(x0 + kWork, W), y1 = std::min(y0 + kWork, H);
+      int hits = 0;
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) hits += cast_pixel(sampler, x, y) ? 1 : 0;
+      tile_hits[size_t(wi)] = hits;
+    }
   });
   int total = 0;
-  for (int h : row_hits) total += h;
+  for (int h : tile_hits) total += h;
   out->hit_count = total;
 }
 

@@ -3,10 +3,14 @@
 //   RaycastResult r = raycast(grid, camera, T_world_camera);   // vertex/normal/colour/depth maps, camera frame
 //
 // Per pixel (KinectFusion / InfiniTAM / Niessner et al. 2013): the ray from the camera centre through the pixel
-// centre is marched from min_depth_m to max_depth_m. Where the block containing the ray point does not exist the
-// ray jumps to where it leaves that block (free space and unseen space are never stepped through voxel by voxel);
-// inside allocated blocks it takes steps of step_fraction * sdf * mu (at least min_step_vox voxels), sampling the
-// trilinearly interpolated SDF. The first sign change from + to - is the surface (a change from - to +, seen when a
+// centre is marched within [min_depth_m, max_depth_m], narrowed to the depth range of the allocated blocks its
+// 8 x 8 pixel tile sees (InfiniTAM's range image; blocks are clipped against the near plane before they are
+// projected). Where the block containing the ray point does not exist the ray jumps to where it leaves that block,
+// or the whole 4 x 4 x 4-block region when that holds no block (free and unseen space are never stepped through
+// voxel by voxel). Inside allocated blocks, where the nearest voxel is far in front of the surface (sdf > 0.5) the
+// ray advances by step_fraction of the distance bound sdf * mu - sqrt(3)/2 voxel without interpolating; nearer
+// the surface it takes steps of step_fraction * sdf * mu (at least min_step_vox voxels), sampling the trilinearly
+// interpolated SDF. The first sign change from + to - is the surface (a change from - to +, seen when a
 // ray leaves the back of a surface, is ignored); the crossing is refined by linear interpolation of the two
 // bracketing samples (then two regula-falsi steps on the same bracket). Normals are the normalised SDF gradient
 // by central differences of trilinear samples one voxel apart; colour is trilinear.
@@ -18,7 +22,7 @@
 // A sample is valid only when its eight voxels are observed (weight > 0 and >= min_weight); invalid samples are
 // stepped over one voxel at a time and break a + to - bracket (no surface is invented across unobserved space).
 //
-// Thread-safety: raycast() reads the grid only and runs in parallel over rows (core/parallel.h); the grid must
+// Thread-safety: raycast() reads the grid only and runs in parallel over 16 x 16 pixel tiles (TBB); the grid must
 // not be modified (integrate, allocate, release) while it runs. Deterministic: the result does not depend on the
 // thread count.
 #pragma once
@@ -46,7 +50,7 @@ class BlockLookup {
 
   const VoxelBlock* find(int bx, int by, int bz) const {
     if (slots_.empty()) return nullptr;
-    size_t i = BlockCoordHash{}(BlockCoord{bx, by, bz}) & mask_;
+    size_t i = slot_of(bx, by, bz);
     for (;;) {
       const Slot& s = slots_[i];
       if (s.block == nullptr) return nullptr;
@@ -56,13 +60,40 @@ class BlockLookup {
   }
   size_t size() const { return size_; }
 
+  // Coarse occupancy for skipping empty space: a region is kRegionBlocks^3 blocks (region r holds blocks
+  // [4 r, 4 r + 4) on each axis); true when any of its blocks exists.
+  static constexpr int kRegionShift = 2;
+  static constexpr int kRegionBlocks = 1 << kRegionShift;
+  bool region_occupied(int rx, int ry, int rz) const {
+    if (regions_.empty()) return false;
+    size_t i = slot_of(rx, ry, rz) >> region_extra_shift_;
+    for (;;) {
+      const Slot& s = regions_[i];
+      if (s.block == nullptr) return false;
+      if (s.x == rx && s.y == ry && s.z == rz) return true;
+      i = (i + 1) & region_mask_;
+    }
+  }
+
  private:
+  // Niessner's hash spreads neighbouring blocks poorly over the low bits a power-of-two table uses (long probe
+  // runs for the misses a raycast mostly asks about); a Fibonacci multiply takes the well-mixed high bits instead.
+  size_t slot_of(int bx, int by, int bz) const {
+    const std::uint64_t k = (std::uint64_t(std::uint32_t(bx)) * 0x9E3779B97F4A7C15ull) ^
+                            (std::uint64_t(std::uint32_t(by)) * 0xC2B2AE3D27D4EB4Full) ^
+                            (std::uint64_t(std::uint32_t(bz)) * 0x165667B19E3779F9ull);
+    return size_t((k * 0x9E3779B97F4A7C15ull) >> shift_);
+  }
   struct Slot {
     int x = 0, y = 0, z = 0;
     const VoxelBlock* block = nullptr;
   };
   std::vector<Slot> slots_;
+  std::vector<Slot> regions_;  // Slot::block is any block of the region (only tested for nullptr)
+  size_t region_mask_ = 0;
+  int region_extra_shift_ = 0;  // regions_ is smaller than slots_ by this many bits
   size_t mask_ = 0;
+  int shift_ = 63;  // 64 - log2(table size)
   size_t size_ = 0;
 };
 
@@ -76,12 +107,27 @@ class VolumeSampler {
 
   // The voxel at world-grid index (i, j, k), or nullptr when its block does not exist.
   const Voxel* voxel(int i, int j, int k) {
-    const int bx = i >> 3, by = j >> 3, bz = k >> 3;  // arithmetic shift: floor division by 8
-    if (bx != cx_ || by != cy_ || bz != cz_) {
-      cached_ = lookup_->find(bx, by, bz);
-      cx_ = bx, cy_ = by, cz_ = bz;
+    const VoxelBlock* b = block(i >> 3, j >> 3, k >> 3);  // arithmetic shift: floor division by 8
+    return b ? &b->voxels[hf_voxel_index(i & 7, j & 7, k & 7)] : nullptr;
+  }
+  // The block at block coordinates (bx, by, bz) or nullptr. Cached in 8 entries chosen by the parity of the
+  // coordinates, so the up to 8 blocks of any 2 x 2 x 2 neighbourhood (a trilinear sample or a gradient across a
+  // block border) stay cached together.
+  const VoxelBlock* block(int bx, int by, int bz) {
+    CacheEntry& e = cache_[(bx & 1) | ((by & 1) << 1) | ((bz & 1) << 2)];
+    if (bx != e.x || by != e.y || bz != e.z) {
+      e.block = lookup_->find(bx, by, bz);
+      e.x = bx, e.y = by, e.z = bz;
     }
-    return cached_ ? &cached_->voxels[hf_voxel_index(i & 7, j & 7, k & 7)] : nullptr;
+    return e.block;
+  }
+  // BlockLookup::region_occupied with the last region cached.
+  bool region_occupied(int rx, int ry, int rz) {
+    if (rx != rx_ || ry != ry_ || rz != rz_) {
+      region_ = lookup_->region_occupied(rx, ry, rz);
+      rx_ = rx, ry_ = ry, rz_ = rz;
+    }
+    return region_;
   }
   bool observed(const Voxel* v) const { return v != nullptr && v->weight != 0 && v->weight >= min_weight_raw_; }
 
@@ -98,8 +144,13 @@ class VolumeSampler {
 
   const BlockLookup* lookup_;
   std::uint16_t min_weight_raw_;
-  int cx_ = -2147483647 - 1, cy_ = 0, cz_ = 0;  // no block cached yet (block x never reaches INT_MIN)
-  const VoxelBlock* cached_ = nullptr;
+  struct CacheEntry {
+    int x = -2147483647 - 1, y = 0, z = 0;  // nothing cached yet (block x never reaches INT_MIN)
+    const VoxelBlock* block = nullptr;
+  };
+  CacheEntry cache_[8];
+  int rx_ = -2147483647 - 1, ry_ = 0, rz_ = 0;
+  bool region_ = false;
 };
 
 struct RaycastOptions {

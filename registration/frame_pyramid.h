@@ -34,6 +34,7 @@ struct FramePyramid {
 struct FramePyramidOptions {
   int levels = 3;                  // KinectFusion: 3
   bool bilateral_filter = true;    // KinectFusion eq. 2 on level 0 depth before the vertex/normal maps
+                                   // (core/filters.h defaults: 7x7 window, sigma_s 4.5 px, sigma_r 30 mm)
   float max_depth_m = 0.0f;        // depths beyond this are dropped (0 = keep all)
   float min_depth_m = 0.0f;        // depths below this are dropped
 };

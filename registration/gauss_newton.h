@@ -23,6 +23,7 @@ struct GaussNewtonStep {
   Vector6d eigenvalues = Vector6d::Zero();  // ascending
   int degenerate_dims = 6;
   double condition_number = 0.0;  // lambda_max / lambda_min, 0 when lambda_min <= 0
+  Vector6d weakest_direction = Vector6d::Zero();  // unit eigenvector of the smallest eigenvalue
   bool finite = false;            // H and g were finite
 };
 GaussNewtonStep solve_gauss_newton_step(const Matrix6d& H, const Vector6d& g, double degeneracy_threshold);
@@ -43,6 +44,10 @@ class GaussNewtonRegistration : public Registration {
  private:
   RegistrationResult align_impl(const FramePyramid& current, const FramePyramid& reference,
                                 const SE3& T_ref_cur_initial);
+  // Marks a usable result failed (T = the initial guess) when it moved far and the reverse alignment does not
+  // confirm it (see gauss_newton.cpp).
+  void verify_large_motion(const FramePyramid& current, const FramePyramid& reference, const SE3& T_initial,
+                           RegistrationResult& result);
   hf_reg_params level_params(int level) const;
 
   std::string name_;

@@ -57,6 +57,12 @@ void RegistrationOptions::validate() const {
   check(finite_positive(t_sigma_icp_m), "t_sigma_icp_m must be finite and > 0");
   check(std::isfinite(rgb_weight) && rgb_weight >= 0.0f, "rgb_weight must be finite and >= 0");
   check(std::isfinite(min_gradient) && min_gradient >= 0.0f, "min_gradient must be finite and >= 0");
+  check(std::isfinite(verify_motion_m) && verify_motion_m >= 0.0, "verify_motion_m must be finite and >= 0");
+  check(std::isfinite(verify_motion_deg) && verify_motion_deg >= 0.0, "verify_motion_deg must be finite and >= 0");
+  check(finite_positive(verify_agreement_m), "verify_agreement_m must be finite and > 0");
+  check(finite_positive(verify_agreement_deg), "verify_agreement_deg must be finite and > 0");
+  check(finest_level_photometric_step >= 1 && finest_level_photometric_step <= 16,
+        "finest_level_photometric_step must be in 1..16");
   check(std::isfinite(degeneracy_threshold) && degeneracy_threshold >= 0.0 && degeneracy_threshold < 1.0,
         "degeneracy_threshold must be in [0, 1)");
   check(min_inliers >= 6, "min_inliers must be >= 6 (six unknowns)");

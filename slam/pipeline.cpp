@@ -139,11 +139,14 @@ template <class V>
 void visit_scalars(V&& v, PipelineConfig& c) {
   v("registration", c.registration);
   v("backend", c.backend);
+  v("tracking_level", c.tracking_level);
   v("constant_velocity", c.constant_velocity);
   v("max_speed_m_per_s", c.max_speed_m_per_s);
   v("max_angular_speed_deg_per_s", c.max_angular_speed_deg_per_s);
   v("max_degenerate_dims", c.max_degenerate_dims);
   v("integrate_poor", c.integrate_poor);
+  v("min_overlap", c.min_overlap);
+  v("min_consistent", c.min_consistent);
   v("stream_radius_m", c.stream_radius_m);
 }
 
@@ -170,6 +173,39 @@ RegistrationOptions effective_registration_options(const PipelineConfig& c) {
   return default_registration_options(c.registration);
 }
 
+// Share of the frame's depth that agrees with the model depth where it lands (see PipelineConfig::min_consistent):
+// (pixels sampled, pixels landing on the model, pixels agreeing).
+struct Consistency {
+  long sampled = 0, overlap = 0, consistent = 0;
+};
+
+Consistency depth_consistency(const VertexMap& current, const fusion::RaycastResult& model, const PinholeCamera& cam,
+                              const SE3& T_ref_cur, double voxel_m) {
+  const Eigen::Matrix3f R = T_ref_cur.rotation().cast<float>();
+  const Eigen::Vector3f t = T_ref_cur.translation().cast<float>();
+  Consistency c;
+  constexpr int kStride = 4;
+  for (int y = kStride / 2; y < current.height(); y += kStride) {
+    for (int x = kStride / 2; x < current.width(); x += kStride) {
+      const hf_float4& v = current(x, y);
+      if (v.w == 0.0f) continue;
+      ++c.sampled;
+      const Eigen::Vector3f p = R * Eigen::Vector3f(v.x, v.y, v.z) + t;
+      if (!(p.z() > 0.0f)) continue;
+      const int u = int(std::lround(cam.fx * p.x() / p.z() + cam.cx));
+      const int w = int(std::lround(cam.fy * p.y() / p.z() + cam.cy));
+      if (u < 0 || w < 0 || u >= cam.width || w >= cam.height) continue;
+      const float d_model = model.depth(u, w);
+      if (!(d_model > 0.0f)) continue;
+      ++c.overlap;
+      const double z = p.z();
+      const double sigma = 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4);
+      c.consistent += std::abs(double(d_model) - z) <= 3.0 * sigma + voxel_m;
+    }
+  }
+  return c;
+}
+
 }  // namespace
 
 // --- Configuration ----------------------------------------------------------------------------------------------
@@ -191,10 +227,13 @@ void PipelineConfig::validate() const {
   if (!(integrate.observation_weight > 0 && std::isfinite(integrate.observation_weight)))
     throw Error("integrate.observation_weight must be positive");
   if (pyramid.levels < 1 || pyramid.levels > 6) throw Error("pyramid.levels must be in [1, 6]");
+  if (tracking_level < 0 || tracking_level > 2) throw Error("tracking_level must be 0, 1 or 2");
   if (registration_options) registration_options->validate();
   if (!(max_speed_m_per_s > 0)) throw Error("max_speed_m_per_s must be positive");
   if (!(max_angular_speed_deg_per_s > 0)) throw Error("max_angular_speed_deg_per_s must be positive");
   if (max_degenerate_dims < 0 || max_degenerate_dims > 6) throw Error("max_degenerate_dims must be in [0, 6]");
+  if (!(min_overlap >= 0 && min_overlap <= 1)) throw Error("min_overlap must be in [0, 1]");
+  if (!(min_consistent >= 0 && min_consistent <= 1)) throw Error("min_consistent must be in [0, 1]");
   if (!(stream_radius_m >= 0) || !std::isfinite(stream_radius_m)) throw Error("stream_radius_m must be >= 0");
 }
 
@@ -284,7 +323,8 @@ struct Pipeline::Reference {
 };
 
 Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
-    : config_(config), camera_(camera), grid_((config.validate(), config.volume)),
+    : config_(config), camera_(camera), tracking_camera_(camera.scaled(config.tracking_level)),
+      grid_((config.validate(), config.volume)),
       reference_(std::make_unique<Reference>()) {
   config_.raycast.shade = false;
   if (config_.registration != "groundtruth") {
@@ -343,7 +383,10 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
   FramePyramid current;
   {
     const auto t0 = std::chrono::steady_clock::now();
-    current = build_frame_pyramid(frame.depth, has_color ? &frame.color : nullptr, camera_, config_.pyramid);
+    FramePyramidOptions po = config_.pyramid;
+    po.levels += config_.tracking_level;
+    current = build_frame_pyramid(frame.depth, has_color ? &frame.color : nullptr, camera_, po);
+    current.levels.erase(current.levels.begin(), current.levels.begin() + config_.tracking_level);
     r.ms.preprocess = ms_since(t0);
   }
 
@@ -355,9 +398,9 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
     const bool poor = r.registration && r.registration->status == RegistrationStatus::poor;
     if (!poor || config_.integrate_poor) integrate_at(T_world_cur);
     const auto t0 = std::chrono::steady_clock::now();
-    fusion::raycast(grid_, camera_, T_world_cur, config_.raycast, &reference_->model);
+    fusion::raycast(grid_, tracking_camera_, T_world_cur, config_.raycast, &reference_->model);
     reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
-                                              camera_, config_.pyramid.levels);
+                                              tracking_camera_, config_.pyramid.levels);
     reference_->last_frame = std::move(current);
     for (int l = 0; l < reference_->pyramid.num_levels() && l < reference_->last_frame.num_levels(); ++l) {
       FramePyramidLevel& dst = reference_->pyramid.levels[size_t(l)];
@@ -416,6 +459,15 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
   if (angular > config_.max_angular_speed_deg_per_s)
     return lose("implausible rotation: " + std::to_string(angular) + " deg/s > max_angular_speed_deg_per_s " +
                 std::to_string(config_.max_angular_speed_deg_per_s));
+  {
+    const Consistency cons = depth_consistency(current.levels[0].vertices, reference_->model, tracking_camera_, reg.T_ref_cur,
+                                               config_.volume.voxel_m);
+    if (cons.sampled > 0 && double(cons.overlap) >= config_.min_overlap * double(cons.sampled) &&
+        double(cons.consistent) < config_.min_consistent * double(cons.overlap))
+      return lose("depth disagrees with the map: " + std::to_string(cons.consistent) + " of " +
+                  std::to_string(cons.overlap) + " overlapping samples consistent (min_consistent " +
+                  std::to_string(config_.min_consistent) + ")");
+  }
   const bool recovering = was_lost_;
   // After a loss the motion spans several frames: no prior for the next one rather than a wrong one.
   velocity_ = recovering ? SE3() : reg.T_ref_cur;

@@ -59,6 +59,10 @@ struct PipelineConfig {
   fusion::IntegrateParams integrate;
   fusion::RaycastOptions raycast;          // shade is forced off for tracking; render() shades
   FramePyramidOptions pyramid;
+  // The pyramid level tracking starts at: 0 = full resolution; 1 = half (DVO-SLAM tracked at 320x240 in real time
+  // on one core). Tracking then uses pyramid.levels levels from there, and the model is raycast at that resolution;
+  // integration always uses the full-resolution frame. Chosen by measurement (bench/results/).
+  int tracking_level = 0;
   // Registration options; unset = the method's defaults (default_registration_options).
   std::optional<RegistrationOptions> registration_options;
   // Motion prior: the initial guess of T_ref_cur is the last inter-frame motion (constant velocity) when true, the
@@ -69,6 +73,13 @@ struct PipelineConfig {
   double max_angular_speed_deg_per_s = 360.0;  // fr1/rpy peaks near 150 deg/s
   int max_degenerate_dims = 3;              // more unconstrained directions than this: lost
   bool integrate_poor = true;               // integrate frames whose registration is `poor`
+  // Depth consistency (decide stage): the frame's depth, moved by the estimated motion, is compared with the model
+  // depth it lands on (every 4th pixel). Where at least min_overlap of the sampled pixels land on the model, at
+  // least min_consistent of those must agree within 3 sigma of the Kinect axial noise (Nguyen et al. 2012) plus
+  // one voxel; else the depth is garbage (or the pose is wrong) and the frame is lost. Photometric rows can track a
+  // frame whose depth is broken, so the pose alone does not protect the map.
+  double min_overlap = 0.2;
+  double min_consistent = 0.5;
   // Streaming (Niessner et al. 2013): blocks farther than this from the camera go to the host store after each
   // frame; 0 = off.
   double stream_radius_m = 0.0;
@@ -141,6 +152,7 @@ class Pipeline {
   struct Reference;
   PipelineConfig config_;
   PinholeCamera camera_;
+  PinholeCamera tracking_camera_;  // camera_.scaled(tracking_level)
   fusion::VoxelBlockGrid grid_;
   fusion::BlockStore store_;
   std::unique_ptr<Registration> registration_;  // null for groundtruth

@@ -43,23 +43,23 @@ HF_INLINE hf_voxel hf_tsdf_update(hf_voxel v, float tsdf, float w, float max_wei
   return out;
 }
 
-// The whole per-voxel step: p_cam is the voxel centre in the camera frame (metres), depth a width x height
-// row-major image in metres (0 = no measurement), rgb the matching colour image as 3 bytes per pixel (or 0 for
-// none). mu = truncation distance in metres. Returns 1 when the voxel was updated, 0 when it was not observed.
-HF_INLINE int hf_integrate_voxel(HF_GLOBAL hf_voxel* voxel, hf_float4 p_cam, HF_GLOBAL const float* depth,
-                                 HF_GLOBAL const hf_uint8* rgb, hf_intrinsics K, float mu, float max_weight,
-                                 float w) {
-  if (p_cam.z <= 0.0f) return 0;
-  float inv_z = 1.0f / p_cam.z;
-  float px = K.fx * p_cam.x * inv_z + K.cx + 0.5f;  // + 0.5 and floor: nearest pixel centre
-  float py = K.fy * p_cam.y * inv_z + K.cy + 0.5f;
-  if (!(px >= 0.0f && py >= 0.0f && px < (float)K.width && py < (float)K.height)) return 0;
-  int u = (int)px;
-  int v = (int)py;
-  int idx = v * K.width + u;
+// Where the voxel centre (x, y, z) (camera frame, metres) projects: the row-major index of the nearest pixel, or
+// -1 when it lies behind the camera or outside the image. Branch-free, so a loop over a block row vectorises.
+HF_INLINE int hf_voxel_pixel(float x, float y, float z, hf_intrinsics K) {
+  float inv_z = 1.0f / z;
+  float px = K.fx * x * inv_z + K.cx + 0.5f;  // + 0.5 and floor: nearest pixel centre
+  float py = K.fy * y * inv_z + K.cy + 0.5f;
+  int inside = (z > 0.0f) & (px >= 0.0f) & (py >= 0.0f) & (px < (float)K.width) & (py < (float)K.height);
+  return inside ? (int)py * K.width + (int)px : -1;
+}
+
+// The per-voxel step once the voxel's pixel is known: z is the voxel centre's depth in the camera frame, idx the
+// pixel from hf_voxel_pixel (>= 0). Returns 1 when the voxel was updated, 0 when it was not observed.
+HF_INLINE int hf_integrate_voxel_at(HF_GLOBAL hf_voxel* voxel, float z, int idx, HF_GLOBAL const float* depth,
+                                    HF_GLOBAL const hf_uint8* rgb, float mu, float max_weight, float w) {
   float d = depth[idx];
   if (!(d > 0.0f) || !hf_isfinite(d)) return 0;
-  float eta = d - p_cam.z;
+  float eta = d - z;
   if (eta < -mu) return 0;
   float tsdf = eta >= mu ? 1.0f : eta / mu;
   int colour_valid = 0;
@@ -72,6 +72,17 @@ HF_INLINE int hf_integrate_voxel(HF_GLOBAL hf_voxel* voxel, hf_float4 p_cam, HF_
   }
   *voxel = hf_tsdf_update(*voxel, tsdf, w, max_weight, colour_valid, r, g, b);
   return 1;
+}
+
+// The whole per-voxel step: p_cam is the voxel centre in the camera frame (metres), depth a width x height
+// row-major image in metres (0 = no measurement), rgb the matching colour image as 3 bytes per pixel (or 0 for
+// none). mu = truncation distance in metres. Returns 1 when the voxel was updated, 0 when it was not observed.
+HF_INLINE int hf_integrate_voxel(HF_GLOBAL hf_voxel* voxel, hf_float4 p_cam, HF_GLOBAL const float* depth,
+                                 HF_GLOBAL const hf_uint8* rgb, hf_intrinsics K, float mu, float max_weight,
+                                 float w) {
+  int idx = hf_voxel_pixel(p_cam.x, p_cam.y, p_cam.z, K);
+  if (idx < 0) return 0;
+  return hf_integrate_voxel_at(voxel, p_cam.z, idx, depth, rgb, mu, max_weight, w);
 }
 
 #endif

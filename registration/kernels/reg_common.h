@@ -76,6 +76,8 @@ typedef struct {
   float min_gradient_sq;       // photometric: skip pixels whose reference gradient |grad I|^2 is below this
   int occlusion_check;         // photometric: non-zero rejects pixels whose warped depth differs from the
                                // reference vertex at that pixel by more than max_dist_m
+  int photometric_step;        // photometric rows only for current pixels with x and y multiples of this
+                               // (<= 1: every pixel); geometric rows are evaluated at every pixel
 } hf_reg_params;
 
 HF_INLINE hf_float4 hf_reg_transform_point(hf_transform12 T, hf_float4 p) {

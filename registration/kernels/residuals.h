@@ -25,7 +25,8 @@ HF_INLINE int hf_reg_pixel(int x, int y, const HF_GLOBAL hf_float4* cur_vertices
   if (p.method == HF_REG_ICP || p.method == HF_REG_COMBINED) {
     n += hf_icp_pixel(x, y, cur_vertices, cur_normals, ref_vertices, ref_normals, K, T, p, rows + n);
   }
-  if (p.method == HF_REG_PHOTOMETRIC || p.method == HF_REG_COMBINED) {
+  const int on_grid = p.photometric_step <= 1 || ((x % p.photometric_step) == 0 && (y % p.photometric_step) == 0);
+  if ((p.method == HF_REG_PHOTOMETRIC || p.method == HF_REG_COMBINED) && on_grid) {
     n += hf_photometric_pixel(x, y, cur_vertices, cur_intensity, ref_vertices, ref_intensity, ref_grad_x,
                               ref_grad_y, K, T, p, rows + n);
   }

@@ -1,12 +1,13 @@
 # hashfusion run on a short synthetic room: every output exists, the report is JSON with the documented fields,
-# and ground-truth "registration" evaluates to an ATE of (numerically) zero.
+# and ground-truth poses (fusion only) evaluate to an ATE of (numerically) zero.
 file(REMOVE_RECURSE ${OUT})
-execute_process(COMMAND ${HASHFUSION} run --input synthetic:room --synthetic-frames 12 --camera ros --out ${OUT}
+execute_process(COMMAND ${HASHFUSION} run --input synthetic:room --synthetic-frames 12 --camera ros --registration groundtruth
+                        --out ${OUT}
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "run failed (${rc}): ${err}")
 endif()
-foreach(f trajectory.txt trajectory.png report.json report.md)
+foreach(f trajectory.txt mesh.ply render.png trajectory.png report.json report.md)
   if(NOT EXISTS ${OUT}/${f})
     message(FATAL_ERROR "missing output ${OUT}/${f}")
   endif()
@@ -15,12 +16,23 @@ foreach(f trajectory.txt trajectory.png report.json report.md)
   endif()
 endforeach()
 file(READ ${OUT}/report.json json)
-foreach(key frames frames_lost ate_rmse_m rpe_trans_m_per_s rpe_rot_deg_per_s fps ms_per_frame registration config)
+foreach(key frames frames_lost ate_rmse_m rpe_trans_m_per_s rpe_rot_deg_per_s fps ms_per_frame blocks_allocated
+            bytes_per_voxel memory_bytes registration backend voxel_m config)
   string(JSON value ERROR_VARIABLE e GET "${json}" ${key})
   if(e)
     message(FATAL_ERROR "report.json lacks '${key}': ${e}")
   endif()
 endforeach()
+foreach(stage read preprocess track integrate raycast total)
+  string(JSON value ERROR_VARIABLE e GET "${json}" ms_per_frame ${stage})
+  if(e)
+    message(FATAL_ERROR "report.json ms_per_frame lacks '${stage}': ${e}")
+  endif()
+endforeach()
+file(READ ${OUT}/mesh.ply ply_head LIMIT 600)
+if(NOT ply_head MATCHES "format binary_little_endian" OR NOT ply_head MATCHES "property uchar red")
+  message(FATAL_ERROR "mesh.ply is not a binary coloured PLY: ${ply_head}")
+endif()
 string(JSON frames GET "${json}" frames)
 string(JSON ate GET "${json}" ate_rmse_m)
 if(NOT frames EQUAL 12)

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "core/error.h"
+#include "core/kernels/image_kernels.h"
 #include "tests/core/synthetic.h"
 
 namespace hf {
@@ -59,8 +60,8 @@ TEST(BilateralFilter, ReducesNoiseOnPlaneByExpectedFactor) {
   const double sigma_n = 0.003;
   test::add_depth_noise(noisy, sigma_n, 42);
   const BilateralParams params;
-  const int radius = int(std::ceil(2.0 * params.sigma_s_px));
-  ASSERT_EQ(radius, 9);
+  const int radius = bilateral_radius_px(params);
+  ASSERT_EQ(radius, 3);
   const DepthImage filtered = bilateral_filter_depth(noisy, params);
   const Residuals before = interior_residuals(noisy, truth, radius);
   const Residuals after = interior_residuals(filtered, truth, radius);
@@ -90,7 +91,7 @@ TEST(BilateralFilter, PreservesDepthEdge) {
   const double sigma_n = 0.003;
   test::add_depth_noise(noisy, sigma_n, 5);
   const BilateralParams params;
-  const double n_eff = effective_neighbours(params, 9);
+  const double n_eff = effective_neighbours(params, bilateral_radius_px(params));
   const double bound = 5.0 * sigma_n * std::sqrt(4.0 / n_eff) + sigma_n * sigma_n / (0.03 * 0.03) * 5.0 * sigma_n;
   const DepthImage filtered = bilateral_filter_depth(noisy, params);
   double worst = 0.0;
@@ -118,7 +119,7 @@ TEST(BilateralFilter, InvalidPixelsStayInvalidAndCarryNoWeight) {
     const float in = d.data()[i];
     const bool valid = std::isfinite(in) && in > 0.0f;
     // A constant surface stays exactly constant when holes carry no weight (all samples are 1.25).
-    // (to the rounding of a ~361-term weighted sum, a few ulps of 1.25 = 1.2e-7)
+    // (to the rounding of a 49-term weighted sum, a few ulps of 1.25 = 1.2e-7)
     ASSERT_NEAR(f.data()[i], valid ? 1.25f : 0.0f, 2e-6f) << i;
   }
 }
@@ -144,6 +145,52 @@ TEST(BilateralFilter, ExplicitRadiusAndBadParams) {
   for (auto bad : {BilateralParams{0.0f, 0.03f, 0}, BilateralParams{4.5f, -1.0f, 0}, BilateralParams{4.5f, 0.03f, -1},
                    BilateralParams{std::numeric_limits<float>::quiet_NaN(), 0.03f, 0}}) {
     EXPECT_THROW(bilateral_filter_depth(d, bad), Error);
+  }
+}
+
+// The default window is 7x7; radius_px = 0 still selects ceil(2 sigma_s) = 9 (19x19), and a wider window
+// smooths more: on the same noisy plane the 19x19 output is quieter than the 7x7 one.
+TEST(BilateralFilter, AutoRadiusIsTwoSigma) {
+  BilateralParams p;
+  EXPECT_EQ(bilateral_radius_px(p), 3);
+  p.radius_px = 0;
+  EXPECT_EQ(bilateral_radius_px(p), 9);
+  const PinholeCamera cam = test_camera(2);
+  const DepthImage truth = test::render_plane(cam, Eigen::Vector3d(0.0, 0.0, 1.0), 1.5);
+  DepthImage noisy = truth;
+  test::add_depth_noise(noisy, 0.003, 7);
+  const double wide = interior_residuals(bilateral_filter_depth(noisy, p), truth, 9).stddev;
+  const double narrow = interior_residuals(bilateral_filter_depth(noisy), truth, 9).stddev;
+  EXPECT_LT(wide, 0.8 * narrow);
+}
+
+// The vectorised CPU loop and the shared per-pixel function (the OpenCL path) compute the same eq. 2: on depth
+// with edges, slopes and every kind of hole they agree to float rounding (the polynomial exp is accurate to
+// 2e-7 relative; outputs are ~1-3 m, so 1e-5 m is ~10 ulps).
+TEST(BilateralFilter, MatchesSharedPixelKernel) {
+  const int w = 97, h = 61;
+  DepthImage d(w, h);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::normal_distribution<float> noise(0.0f, 0.01f);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const float holes[] = {0.0f, nan, inf, -1.0f};
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      d(x, y) = (x < 40 ? 1.0f + 0.01f * float(y) : 2.5f - 0.005f * float(x)) + noise(rng);
+      if (u(rng) < 0.15f) d(x, y) = holes[int(u(rng) * 4.0f) & 3];
+    }
+  for (const int radius : {1, 3, 0}) {
+    BilateralParams p;
+    p.radius_px = radius;
+    const int r = bilateral_radius_px(p);
+    const float iss = 1.0f / (2.0f * p.sigma_s_px * p.sigma_s_px), irr = 1.0f / (2.0f * p.sigma_r_m * p.sigma_r_m);
+    const DepthImage f = bilateral_filter_depth(d, p);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        ASSERT_NEAR(f(x, y), hf_bilateral_depth_pixel(d.data(), w, h, x, y, r, iss, irr), 1e-5f)
+            << x << "," << y << " radius " << r;
+      }
   }
 }
 

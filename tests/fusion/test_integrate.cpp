@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "datasets/presets.h"
@@ -331,6 +332,54 @@ TEST(Integrate, ErrorsAndDeterminism) {
     bytes[run] = serialize_volume(g);
   }
   EXPECT_EQ(bytes[0], bytes[1]);
+}
+
+// integrate()'s update loop (projections of a block row first, then the updates) must give exactly what the
+// shared per-voxel kernel hf_integrate_voxel gives voxel by voxel (the OpenCL path will run the latter), with the
+// voxel centres stepped through the block the same way.
+TEST(Integrate, UpdateLoopMatchesPerVoxelKernelBitForBit) {
+  datasets::SyntheticOptions options;
+  options.preset = "sphere";
+  options.frames = 3;
+  options.camera = small_camera();
+  options.noise_enabled = true;
+  const datasets::SyntheticSequence seq(options);
+  const VolumeParams volume = params_1cm();
+  VoxelBlockGrid fast(volume), reference(volume);
+  const hf_intrinsics K = seq.camera().kernel_intrinsics();
+  const float mu = float(volume.truncation_m());
+  size_t updated = 0;
+  for (int f = 0; f < seq.size(); ++f) {
+    const datasets::SyntheticFrame frame = seq.frame(f);
+    integrate(fast, frame.depth, frame.color, seq.camera(), frame.T_world_camera);
+    const SE3 T_camera_world = frame.T_world_camera.inverse();
+    const Eigen::Matrix3d R = T_camera_world.rotation();
+    const Eigen::Vector3d t = T_camera_world.translation();
+    const Eigen::Vector3f sx = (R.col(0) * volume.voxel_m).cast<float>(), sy = (R.col(1) * volume.voxel_m).cast<float>(),
+                          sz = (R.col(2) * volume.voxel_m).cast<float>();
+    for (const BlockCoord& c : blocks_touched_by(volume, frame.depth, seq.camera(), frame.T_world_camera)) {
+      VoxelBlock* block = reference.allocate(c);
+      const Eigen::Vector3d origin = Eigen::Vector3d(c.x, c.y, c.z) * volume.block_m();
+      const Eigen::Vector3f p0 = (R * (origin + Eigen::Vector3d::Constant(0.5 * volume.voxel_m)) + t).cast<float>();
+      for (int z = 0; z < 8; ++z) {
+        const Eigen::Vector3f pz = p0 + float(z) * sz;
+        for (int y = 0; y < 8; ++y) {
+          Eigen::Vector3f p = pz + float(y) * sy;
+          for (int x = 0; x < 8; ++x, p += sx)
+            updated += hf_integrate_voxel(&block->voxels[hf_voxel_index(x, y, z)],
+                                          hf_make_float4(p.x(), p.y(), p.z(), 1.0f), frame.depth.data(),
+                                          reinterpret_cast<const hf_uint8*>(frame.color.data()), K, mu,
+                                          volume.max_weight, 1.0f);
+        }
+      }
+    }
+  }
+  EXPECT_GT(updated, 50000u);
+  ASSERT_EQ(fast.block_coords(), reference.block_coords());
+  size_t differing = 0;
+  for (const BlockCoord& c : fast.block_coords())
+    differing += std::memcmp(fast.find(c)->voxels.data(), reference.find(c)->voxels.data(), sizeof(VoxelBlock)) != 0;
+  EXPECT_EQ(differing, 0u);
 }
 
 }  // namespace

@@ -1,0 +1,69 @@
+// `hashfusion bench`: every registration on every input, in one process, with one PipelineConfig.
+//
+//   BenchOptions o;  o.inputs = {"synthetic:all", "../shared/data"};  o.registrations = resolve_registrations("all");
+//   BenchReport r = run_bench(o);   // writes o.out/results.{csv,json,md} and speed_vs_error*.png
+//
+// Per input (bench/harness/inputs.h), in order: a synthetic preset is rendered once into a temporary TUM folder
+// (o.out/synthetic_cache/PRESET, removed after its runs), so every method reads the same frames from disk the way
+// it reads a real dataset; then each registration runs on a fresh slam::Pipeline (slam::run_sequence +
+// slam::summarize), then each PCL peer (bench/harness/peers.h). A run that throws (e.g. the block pool is
+// exhausted) becomes a failed row with its one-line message; the harness carries on. When *stop becomes true the
+// current run ends, the rest are skipped, and the results so far are written.
+//
+// Outputs in o.out (each written atomically): results.csv, results.json, results.md (bench/harness/results.h),
+// speed_vs_error.png (all inputs: each method's mean ms per frame against its mean ATE over the inputs it tracked)
+// and speed_vs_error_<input>.png per input with ground truth, and trajectories/<input>__<method>.txt (the TUM
+// trajectory of each run, for re-evaluation).
+#pragma once
+
+#include <atomic>
+#include <string>
+#include <vector>
+
+#include "bench/harness/peers.h"
+#include "bench/harness/results.h"
+
+namespace hf::bench {
+
+struct BenchOptions {
+  std::vector<std::string> inputs;         // --input PATH... (see inputs.h)
+  std::vector<std::string> registrations;  // registry names (resolve_registrations)
+  std::vector<std::string> peers;          // "gicp", "ndt" (resolve_peers)
+  std::string out = "out/bench";
+  double voxel_m = 0.01;
+  std::string backend = "cpu";
+  // The pipeline settings every run shares (slam::load_config form); empty: the defaults. registration, backend and
+  // voxel_m above override the file's; a file's registration_options apply only to the method the file names.
+  std::string config_file;
+  int tracking_level = -1;                 // >= 0 overrides the config's tracking_level
+  long max_frames = 0;                     // per run, 0 = all
+  int synthetic_frames = 300;              // frames rendered per synthetic preset (at most max_frames when set)
+  PeerOptions peer;
+  std::string command_line;                // for the report
+  std::string source_dir;                  // where `git rev-parse HEAD` runs; empty: commit "unknown"
+  const std::atomic<bool>* stop = nullptr;
+  bool progress = true;                    // progress bars on stderr (slam::RunControl::progress_label)
+};
+
+// "all" -> registration_names(); else a comma-separated list of registry names (and "groundtruth"). Throws
+// hf::Error naming an unknown method and listing the known ones, or for an empty list.
+std::vector<std::string> resolve_registrations(const std::string& spec);
+// "none" -> {}; "all" -> peer_names(); else a comma-separated subset of peer_names(). Throws hf::Error otherwise.
+std::vector<std::string> resolve_peers(const std::string& spec);
+
+// The source tree this binary was built from (where `git rev-parse HEAD` names the commit).
+std::string build_source_dir();
+
+// A file-name-safe form of a label: letters, digits, '-', '_' and '.' kept, anything else '_'.
+std::string file_safe(const std::string& label);
+
+struct BenchReport {
+  BenchResults results;
+  std::vector<std::string> files;  // every file written, results first
+};
+
+// Runs everything and writes the outputs. Throws hf::Error for bad options, inputs that cannot be found, or an
+// output folder that cannot be created/written; individual runs never make it throw.
+BenchReport run_bench(const BenchOptions& options);
+
+}  // namespace hf::bench

@@ -1,0 +1,253 @@
+// The SLAM pipeline end to end on short synthetic sequences (half resolution, so each test takes seconds): tracking
+// accuracy, the map against the analytic scene, the failure policy (garbage frames are lost, never integrated, and
+// tracking recovers), the configuration's JSON form, and no NaN pose on any hard case.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <algorithm>
+#include <cstdio>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "core/error.h"
+#include "datasets/synthetic_source.h"
+#include "slam/pipeline.h"
+#include "slam/sequence_run.h"
+
+namespace hf::slam {
+namespace {
+
+// A frame source that hands frames of another through a modifier (for injecting garbage).
+class ModifiedSource : public FrameSource {
+ public:
+  ModifiedSource(std::unique_ptr<FrameSource> inner, std::function<void(RgbdFrame&)> modify)
+      : inner_(std::move(inner)), modify_(std::move(modify)) {}
+  FrameRead next() override {
+    FrameRead r = inner_->next();
+    if (r.status == FrameStatus::ok) modify_(r.frame);
+    return r;
+  }
+  const PinholeCamera& camera() const override { return inner_->camera(); }
+  const std::string& camera_origin() const override { return inner_->camera_origin(); }
+  size_t size() const override { return inner_->size(); }
+  const std::string& name() const override { return inner_->name(); }
+  const Trajectory& ground_truth() const override { return inner_->ground_truth(); }
+
+ private:
+  std::unique_ptr<FrameSource> inner_;
+  std::function<void(RgbdFrame&)> modify_;
+};
+
+datasets::SyntheticOptions half_res(const std::string& preset, int frames) {
+  datasets::SyntheticOptions o;
+  o.preset = preset;
+  o.frames = frames;
+  o.camera = PinholeCamera::preset("ros").scaled(1);  // 320x240
+  return o;
+}
+
+PipelineConfig config_for(const std::string& registration) {
+  PipelineConfig c;
+  c.registration = registration;
+  c.volume.capacity_blocks = 1 << 15;
+  return c;
+}
+
+bool finite_pose(const SE3& T) { return T.matrix().allFinite(); }
+
+TEST(Pipeline, CombinedTracksRoomWithinOneCentimetre) {
+  // Issue 5: `room` with `combined` reaches ATE < 1 cm over 60 frames (Kinect-like noise).
+  auto source = datasets::open_synthetic("room", half_res("room", 60));
+  Pipeline pipeline(config_for("combined"), source->camera());
+  const SequenceRun run = run_sequence(*source, pipeline);
+  ASSERT_EQ(run.frames.size(), 60u);
+  const RunSummary s = summarize(run, pipeline, *source, "synthetic:room");
+  EXPECT_EQ(s.frames_lost, 0);
+  ASSERT_TRUE(s.ate_rmse_m());
+  EXPECT_LT(*s.ate_rmse_m(), 0.01);
+  EXPECT_GT(s.blocks_allocated, 0u);
+  EXPECT_GT(s.mean_ms.track, 0.0);
+  EXPECT_GT(s.mean_ms.raycast, 0.0);
+  EXPECT_EQ(run.frames[0].state, TrackState::initialised);
+  for (size_t i = 1; i < run.frames.size(); ++i) EXPECT_EQ(run.frames[i].state, TrackState::tracked) << i;
+}
+
+TEST(Pipeline, GroundTruthMapMatchesTheScene) {
+  // Fusion only, noise-free depth, against the analytic scene. The fusion issue's sphere bounds (RMS <= 0.2 voxel,
+  // max <= 1 voxel) hold on smooth surfaces; the room also has convex box edges and concave wall corners, which a
+  // TSDF rounds off by construction (two surfaces inside one truncation band; measured tail up to ~1.8 voxels at
+  // both 320x240 and 640x480, so it is not a sampling effect). So: the smooth bulk (95th percentile) within 0.2
+  // voxel, 99% of vertices within 1 voxel, and the RMS (which the edge tail dominates) within 0.3 voxel.
+  auto opts = half_res("room", 20);
+  opts.noise_enabled = false;
+  datasets::SyntheticSequence seq(opts);
+  auto source = datasets::open_synthetic("room", opts);
+  PipelineConfig c = config_for("groundtruth");
+  Pipeline pipeline(c, source->camera());
+  const SequenceRun run = run_sequence(*source, pipeline);
+  for (const auto& f : run.frames) EXPECT_EQ(f.state, TrackState::groundtruth);
+  const TriangleMesh mesh = pipeline.extract_mesh();
+  ASSERT_GT(mesh.vertices.size(), 1000u);
+  double sum2 = 0.0;
+  std::vector<double> abs_d;
+  for (const auto& v : mesh.vertices) {
+    const double d = seq.scene().sdf(v.cast<double>());
+    sum2 += d * d;
+    abs_d.push_back(std::abs(d));
+  }
+  const double rms_vox = std::sqrt(sum2 / double(mesh.vertices.size())) / c.volume.voxel_m;
+  std::sort(abs_d.begin(), abs_d.end());
+  const double p99_vox = abs_d[abs_d.size() * 99 / 100] / c.volume.voxel_m;
+  const double p95_vox = abs_d[abs_d.size() * 95 / 100] / c.volume.voxel_m;
+  std::printf("mesh vs scene: rms %.3f, 95%% %.3f, 99%% %.3f voxel\n", rms_vox, p95_vox, p99_vox);
+  EXPECT_LE(p95_vox, 0.2);
+  EXPECT_LE(p99_vox, 1.0);
+  EXPECT_LE(rms_vox, 0.3);
+}
+
+TEST(Pipeline, GarbageFramesAreLostNotIntegratedAndTrackingRecovers) {
+  // Frame 12: uniform random depth (a sensor glitch); frame 20: no depth at all. Both must be lost, leave the map
+  // untouched, and tracking must continue from the last good pose.
+  auto inner = datasets::open_synthetic("room", half_res("room", 40));
+  ModifiedSource source(std::move(inner), [](RgbdFrame& f) {
+    if (f.index == 12) {
+      std::mt19937 rng(7);
+      std::uniform_real_distribution<float> depth(0.3f, 5.0f);
+      for (int y = 0; y < f.depth.height(); ++y)
+        for (int x = 0; x < f.depth.width(); ++x) f.depth(x, y) = depth(rng);
+    } else if (f.index == 20) {
+      f.depth = DepthImage(f.depth.width(), f.depth.height(), 0.0f);
+    }
+  });
+  Pipeline pipeline(config_for("combined"), source.camera());
+  size_t blocks_before_glitch = 0;
+  RunControl control;
+  control.on_frame = [&](const FrameResult& r) {
+    if (r.index == 11) blocks_before_glitch = pipeline.map().block_count();
+    if (r.index == 12) {
+      EXPECT_EQ(pipeline.map().block_count(), blocks_before_glitch);
+    }
+  };
+  const SequenceRun run = run_sequence(source, pipeline, control);
+  ASSERT_EQ(run.frames.size(), 40u);
+  for (const auto& f : run.frames) EXPECT_TRUE(finite_pose(f.T_world_camera)) << f.index;
+  EXPECT_EQ(run.frames[12].state, TrackState::lost) << run.frames[12].message;
+  EXPECT_FALSE(run.frames[12].integrated);
+  EXPECT_FALSE(run.frames[12].pose_valid);
+  EXPECT_FALSE(run.frames[12].message.empty());
+  EXPECT_EQ(run.frames[20].state, TrackState::lost);
+  EXPECT_FALSE(run.frames[20].integrated);
+  EXPECT_EQ(run.frames[13].state, TrackState::recovered);
+  EXPECT_EQ(run.frames[21].state, TrackState::recovered);
+  EXPECT_EQ(run.frames_lost(), 2);
+  const RunSummary s = summarize(run, pipeline, source, "injected");
+  ASSERT_TRUE(s.ate_rmse_m());
+  EXPECT_LT(*s.ate_rmse_m(), 0.01);
+  EXPECT_EQ(s.frames_lost, 2);
+}
+
+TEST(Pipeline, FirstFramesWithoutDepthDoNotInitialise) {
+  auto inner = datasets::open_synthetic("room", half_res("room", 8));
+  ModifiedSource source(std::move(inner), [](RgbdFrame& f) {
+    if (f.index < 2) f.depth = DepthImage(f.depth.width(), f.depth.height(), 0.0f);
+  });
+  Pipeline pipeline(config_for("icp"), source.camera());
+  const SequenceRun run = run_sequence(source, pipeline);
+  ASSERT_EQ(run.frames.size(), 8u);
+  EXPECT_EQ(run.frames[0].state, TrackState::lost);
+  EXPECT_EQ(run.frames[1].state, TrackState::lost);
+  EXPECT_EQ(run.frames[2].state, TrackState::initialised);
+  EXPECT_EQ(run.frames[3].state, TrackState::tracked);
+}
+
+TEST(Pipeline, EveryHardCaseGivesFinitePosesAndReportsItsFrames) {
+  for (const std::string preset : {"wall", "corridor", "textureless", "fast", "holes", "exposure"}) {
+    SCOPED_TRACE(preset);
+    auto source = datasets::open_synthetic(preset, half_res(preset, 10));
+    Pipeline pipeline(config_for("combined"), source->camera());
+    const SequenceRun run = run_sequence(*source, pipeline);
+    ASSERT_EQ(run.frames.size(), 10u);
+    long lost = 0;
+    for (const auto& f : run.frames) {
+      EXPECT_TRUE(finite_pose(f.T_world_camera)) << f.index;
+      if (f.state == TrackState::lost) {
+        ++lost;
+        EXPECT_FALSE(f.message.empty());
+        EXPECT_FALSE(f.integrated);
+      }
+    }
+    const RunSummary s = summarize(run, pipeline, *source, preset);
+    EXPECT_EQ(s.frames_lost, lost);
+    const nlohmann::json j = summary_to_json(s, run, pipeline, *source);
+    EXPECT_EQ(j["frames_lost"].get<long>(), lost);
+  }
+}
+
+TEST(Pipeline, WrongFrameSizeIsAnError) {
+  const PinholeCamera cam = PinholeCamera::preset("ros").scaled(1);
+  Pipeline pipeline(config_for("icp"), cam);
+  RgbdFrame f;
+  f.depth = DepthImage(100, 80, 1.0f);
+  f.depth_file = "depth/1.png";
+  try {
+    pipeline.process(f);
+    FAIL() << "expected hf::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("depth/1.png"), std::string::npos) << e.what();
+  }
+}
+
+TEST(PipelineConfig, JsonRoundTripAndErrors) {
+  PipelineConfig c = config_for("icp");
+  c.volume.voxel_m = 0.02;
+  c.max_speed_m_per_s = 1.5;
+  RegistrationOptions r = default_registration_options("icp");
+  r.iterations = {6, 4, 2};
+  r.robust_icp = RobustKernel::student_t;
+  c.registration_options = r;
+  const nlohmann::json j = config_to_json(c);
+  const PipelineConfig back = config_from_json(j, "test");
+  EXPECT_EQ(config_to_json(back), j);
+  EXPECT_EQ(back.volume.voxel_m, 0.02);
+  ASSERT_TRUE(back.registration_options);
+  EXPECT_EQ(back.registration_options->iterations, (std::vector<int>{6, 4, 2}));
+  EXPECT_EQ(back.registration_options->robust_icp, RobustKernel::student_t);
+
+  auto error_of = [](const nlohmann::json& bad) -> std::string {
+    try {
+      config_from_json(bad, "cfg.json");
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error_of({{"voxel", 0.01}}).find("cfg.json: unknown key 'voxel'"), std::string::npos);
+  EXPECT_NE(error_of({{"volume", {{"voxel_m", "big"}}}}).find("voxel_m: expected a number"), std::string::npos);
+  EXPECT_NE(error_of({{"volume", {{"voxel_m", -1.0}}}}).find("cfg.json"), std::string::npos);
+  EXPECT_NE(error_of({{"registration", "nope"}}).find("unknown registration method 'nope'"), std::string::npos);
+  EXPECT_NE(error_of({{"registration_options", {{"robust_icp", "cauchy"}}}}).find("unknown robust kernel"),
+            std::string::npos);
+}
+
+TEST(PipelineConfig, FileErrorsNameFileAndLine) {
+  const auto dir = std::filesystem::temp_directory_path() / "hf_test_pipeline_config";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "bad.json").string();
+  {
+    std::ofstream out(path);
+    out << "{\n  \"registration\": \"icp\",\n  \"volume\": { \"voxel_m\": 0.01,, }\n}\n";
+  }
+  try {
+    load_config(path);
+    FAIL() << "expected a parse error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ":3:"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(load_config((dir / "missing.json").string()), Error);
+}
+
+}  // namespace
+}  // namespace hf::slam
