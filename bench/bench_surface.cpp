@@ -1,7 +1,8 @@
 // Raycast and marching-cubes meshing on the room preset (issue 3): a 640x480 raycast at 1 cm and 5 mm voxels
-// after fusing 20 noisy frames, and meshing the whole map. Results in bench/results/fusion.md. cpu_ms_all_threads
-// is the CPU time of all threads per iteration: with other jobs on the 2 cores it depends on the load far less
-// than the wall time does.
+// after fusing 20 noisy frames, the SLAM pipeline's raycast at the pose just integrated with and without
+// RaycastOptions::depth_hint (640x480 and 320x240), and meshing the whole map. Results in bench/results/fusion.md.
+// cpu_ms_all_threads is the CPU time of all threads per iteration: with other jobs on the 2 cores it depends on
+// the load far less than the wall time does.
 //   build/release/bench/bench_surface
 #include <benchmark/benchmark.h>
 
@@ -31,14 +32,16 @@ struct Scene {
   std::unique_ptr<VoxelBlockGrid> grid;
 };
 
-// One fused room per voxel size (built once; frames 0, 4, ..., 76 of the default 640x480 room sequence).
-Scene& room(double voxel_m) {
-  static std::map<double, Scene> cache;
-  Scene& s = cache[voxel_m];
+// One fused room per voxel size and camera scale (built once; frames 0, 4, ..., 76 of the room sequence with the
+// 640x480 "ros" camera, or that camera scaled(scale): 1 = 320x240).
+Scene& room(double voxel_m, int scale = 0) {
+  static std::map<std::pair<double, int>, Scene> cache;
+  Scene& s = cache[{voxel_m, scale}];
   if (!s.grid) {
     datasets::SyntheticOptions o;
     o.preset = "room";
     o.frames = 100;
+    o.camera = PinholeCamera::preset("ros").scaled(scale);
     s.seq = std::make_unique<datasets::SyntheticSequence>(o);
     VolumeParams p;
     p.voxel_m = voxel_m;
@@ -69,6 +72,35 @@ void BM_Raycast(benchmark::State& state) {
   state.counters["blocks"] = double(s.grid->block_count());
 }
 BENCHMARK(BM_Raycast)->Args({10, 0})->Args({10, 1})->Args({5, 0})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The SLAM pipeline's case: raycast at the pose of the frame just integrated (frame 76, the last one fused), with
+// that frame's depth as RaycastOptions::depth_hint (range(2) = 1) or without (0), no shading. range(1) is the
+// camera scale: 0 = 640x480, 1 = 320x240.
+void BM_RaycastAtIntegratedPose(benchmark::State& state) {
+  const double voxel_m = state.range(0) / 1000.0;
+  Scene& s = room(voxel_m, int(state.range(1)));
+  const datasets::SyntheticFrame f = s.seq->frame(76);
+  RaycastResult out;
+  RaycastOptions opts;
+  opts.shade = false;
+  if (state.range(2) != 0) opts.depth_hint = &f.depth;
+  const double cpu0 = process_cpu_s();
+  for (auto _ : state) {
+    raycast(*s.grid, s.seq->camera(), f.T_world_camera, opts, &out);
+    benchmark::DoNotOptimize(out.hit_count);
+  }
+  state.counters["cpu_ms_all_threads"] = (process_cpu_s() - cpu0) * 1e3 / double(state.iterations());
+  state.counters["hits"] = out.hit_count;
+  state.counters["blocks"] = double(s.grid->block_count());
+}
+BENCHMARK(BM_RaycastAtIntegratedPose)
+    ->ArgNames({"voxel_mm", "scale", "hint"})
+    ->Args({10, 0, 0})
+    ->Args({10, 0, 1})
+    ->Args({10, 1, 0})
+    ->Args({10, 1, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_Mesh(benchmark::State& state) {
   const double voxel_m = state.range(0) / 1000.0;

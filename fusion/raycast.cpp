@@ -64,7 +64,8 @@ BlockLookup::BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBloc
 // VolumeSampler
 
 VolumeSampler::VolumeSampler(const BlockLookup& lookup, float min_weight)
-    : lookup_(&lookup), min_weight_raw_(hf_quantise_weight(std::max(0.0f, min_weight))) {}
+    : lookup_(&lookup),
+      min_weight_raw_(std::max<std::uint16_t>(1, hf_quantise_weight(std::max(0.0f, min_weight)))) {}
 
 bool VolumeSampler::corners(const Eigen::Vector3f& p_vox, const Voxel* v[8], float f[3]) {
   const float bx = std::floor(p_vox.x()), by = std::floor(p_vox.y()), bz = std::floor(p_vox.z());
@@ -87,13 +88,23 @@ bool VolumeSampler::corners(const Eigen::Vector3f& p_vox, const Voxel* v[8], flo
   return true;
 }
 
+namespace {
+
+// Trilinear interpolation is linear in the corner values: interpolating the raw int16 values and scaling once
+// equals hf_voxel_sdf per corner up to float rounding, without eight divisions.
+constexpr float kInvSdfScale = 1.0f / HF_SDF_SCALE;
+float raw_trilinear(const Voxel* const v[8], const float f[3]) {
+  return hf_trilinear(float(v[0]->sdf), float(v[1]->sdf), float(v[2]->sdf), float(v[3]->sdf), float(v[4]->sdf),
+                      float(v[5]->sdf), float(v[6]->sdf), float(v[7]->sdf), f[0], f[1], f[2]);
+}
+
+}  // namespace
+
 bool VolumeSampler::sdf(const Eigen::Vector3f& p_vox, float* out) {
   const Voxel* v[8];
   float f[3];
   if (!corners(p_vox, v, f)) return false;
-  *out = hf_trilinear(hf_voxel_sdf(*v[0]), hf_voxel_sdf(*v[1]), hf_voxel_sdf(*v[2]), hf_voxel_sdf(*v[3]),
-                      hf_voxel_sdf(*v[4]), hf_voxel_sdf(*v[5]), hf_voxel_sdf(*v[6]), hf_voxel_sdf(*v[7]), f[0], f[1],
-                      f[2]);
+  *out = raw_trilinear(v, f) * kInvSdfScale;
   return true;
 }
 
@@ -101,9 +112,7 @@ bool VolumeSampler::sdf_color(const Eigen::Vector3f& p_vox, float* out, Eigen::V
   const Voxel* v[8];
   float f[3];
   if (!corners(p_vox, v, f)) return false;
-  *out = hf_trilinear(hf_voxel_sdf(*v[0]), hf_voxel_sdf(*v[1]), hf_voxel_sdf(*v[2]), hf_voxel_sdf(*v[3]),
-                      hf_voxel_sdf(*v[4]), hf_voxel_sdf(*v[5]), hf_voxel_sdf(*v[6]), hf_voxel_sdf(*v[7]), f[0], f[1],
-                      f[2]);
+  *out = raw_trilinear(v, f) * kInvSdfScale;
   auto channel = [&](auto get) {
     return hf_trilinear(float(get(v[0])), float(get(v[1])), float(get(v[2])), float(get(v[3])), float(get(v[4])),
                         float(get(v[5])), float(get(v[6])), float(get(v[7])), f[0], f[1], f[2]);
@@ -113,7 +122,64 @@ bool VolumeSampler::sdf_color(const Eigen::Vector3f& p_vox, float* out, Eigen::V
   return true;
 }
 
+template <int N>
+bool VolumeSampler::row(int i, int j, int k, float* out) {
+  bool ok = true;
+  if ((i & 7) + N <= 8) {
+    const Voxel* v = voxel(i, j, k);
+    if (v == nullptr) return false;
+    for (int c = 0; c < N; ++c) {
+      ok &= v[c].weight >= min_weight_raw_;  // no early exit: all N loads are issued together
+      out[c] = float(v[c].sdf);
+    }
+    return ok;
+  }
+  for (int c = 0; c < N; ++c) {
+    const Voxel* v = voxel(i + c, j, k);
+    if (!observed(v)) return false;
+    out[c] = float(v->sdf);
+  }
+  return true;
+}
+
+bool VolumeSampler::normal_one_voxel(const Eigen::Vector3f& p_vox, Eigen::Vector3f* n) {
+  const float bx = std::floor(p_vox.x()), by = std::floor(p_vox.y()), bz = std::floor(p_vox.z());
+  constexpr float kLimit = 1.0e9f;
+  if (!(std::fabs(bx) < kLimit && std::fabs(by) < kLimit && std::fabs(bz) < kLimit)) return false;
+  const int i = int(bx), j = int(by), k = int(bz);
+  const float fx = p_vox.x() - bx, fy = p_vox.y() - by, fz = p_vox.z() - bz;
+  // s[1 + dz][1 + dy][1 + dx] = voxel (i + dx, j + dy, k + dz), dx, dy, dz in -1 .. 2. The samples at p -+ e_x
+  // need the central 2 x 2 rows (dy, dz in 0 .. 1) over dx = -1 .. 2; those at p -+ e_y and p -+ e_z need the
+  // rows around them over dx = 0 .. 1. The four corner rows (dy and dz both outside 0 .. 1) are not needed.
+  float s[4][4][4] = {};
+  bool ok = true;
+  for (int dz = 0; dz <= 1; ++dz)
+    for (int dy = 0; dy <= 1; ++dy) ok = ok && row<4>(i - 1, j + dy, k + dz, &s[1 + dz][1 + dy][0]);
+  for (int e = 0; e <= 1; ++e) {
+    const int d = e == 0 ? -1 : 2;  // the rows one voxel outside the central 2 x 2 in y, then in z
+    for (int c = 0; c <= 1; ++c) {
+      ok = ok && row<2>(i, j + d, k + c, &s[1 + c][1 + d][1]);
+      ok = ok && row<2>(i, j + c, k + d, &s[1 + d][1 + c][1]);
+    }
+  }
+  if (!ok) return false;
+  // Raw int16 values: the gradient's scale drops out of the normal.
+  // The trilinear sample whose corner (0, 0, 0) is voxel (i + ox, j + oy, k + oz), at the shared offset f.
+  auto sample = [&](int ox, int oy, int oz) {
+    const int x = 1 + ox, y = 1 + oy, z = 1 + oz;
+    return hf_trilinear(s[z][y][x], s[z][y][x + 1], s[z][y + 1][x], s[z][y + 1][x + 1], s[z + 1][y][x],
+                        s[z + 1][y][x + 1], s[z + 1][y + 1][x], s[z + 1][y + 1][x + 1], fx, fy, fz);
+  };
+  const hf_float4 nn = hf_normal_from_differences(sample(1, 0, 0) - sample(-1, 0, 0),
+                                                  sample(0, 1, 0) - sample(0, -1, 0),
+                                                  sample(0, 0, 1) - sample(0, 0, -1));
+  if (!hf_is_valid4(nn)) return false;
+  *n = Eigen::Vector3f(nn.x, nn.y, nn.z);
+  return true;
+}
+
 bool VolumeSampler::normal(const Eigen::Vector3f& p_vox, Eigen::Vector3f* n, float h_vox) {
+  if (h_vox == 1.0f) return normal_one_voxel(p_vox, n);
   float d[3];
   for (int a = 0; a < 3; ++a) {
     Eigen::Vector3f lo = p_vox, hi = p_vox;
@@ -142,6 +208,14 @@ void RaycastOptions::validate() const {
   if (!(min_step_vox > 0.0 && min_step_vox <= 4.0))
     fail("min_step_vox must be in (0, 4], got " + std::to_string(min_step_vox));
   if (!(min_weight >= 0.0f)) fail("min_weight must be >= 0, got " + std::to_string(min_weight));
+}
+
+void RaycastOptions::validate(const PinholeCamera& camera) const {
+  validate();
+  if (depth_hint != nullptr && (depth_hint->width() != camera.width || depth_hint->height() != camera.height))
+    throw Error("invalid raycast options: expected a depth_hint of the camera's size " + std::to_string(camera.width) +
+                "x" + std::to_string(camera.height) + ", got " + std::to_string(depth_hint->width()) + "x" +
+                std::to_string(depth_hint->height()));
 }
 
 RaycastResult raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
@@ -176,6 +250,8 @@ struct Hit {
 bool march(VolumeSampler& sampler, const Eigen::Vector3f& o_vox, const Eigen::Vector3f& d_vox, float t_min,
            float t_max, float mu_m, float step_fraction, float min_step_m, float voxel_m, Hit* hit) {
   constexpr float kFarSdf = 0.5f;
+  constexpr int kRefineSteps = 6;
+  const float refine_tol_m = 1e-3f * voxel_m;
   const float far_margin_m = 0.8660254f * voxel_m;
   const bool cheap_steps = kFarSdf * mu_m - far_margin_m > min_step_m;
   // Block b holds continuous voxel coordinates [8 b - 0.5, 8 b + 7.5).
@@ -240,16 +316,24 @@ bool march(VolumeSampler& sampler, const Eigen::Vector3f& o_vox, const Eigen::Ve
         continue;
       }
       if (have_prev) {
-        // + to - : refine on the bracket [t_prev, t] (linear interpolation, then regula falsi).
+        // + to - : refine on the bracket [t_prev, t] (linear interpolation, then Illinois regula falsi until the
+        // bracket is below kRefineTol voxel). Converging, rather than stopping after a fixed number of steps,
+        // makes the result independent of where the march happened to sample the bracket (the hinted and the
+        // full march agree), and costs only samples of voxels already in cache.
         float ta = t_prev, sa = s_prev, tb = t, sb = s;
         float tc = hf_zero_crossing(ta, sa, tb, sb);
-        for (int it = 0; it < 2; ++it) {
+        int kept = 0;  // +1: the + end was kept last time, -1: the - end
+        for (int it = 0; it < kRefineSteps && tb - ta > refine_tol_m; ++it) {
           float sc = 0.0f;
           if (!sampler.sdf(o_vox + tc * d_vox, &sc)) break;
           if (sc > 0.0f) {
             ta = tc, sa = sc;
+            if (kept == -1) sb *= 0.5f;  // Illinois: the - end stays again, halve its weight
+            kept = -1;
           } else if (sc < 0.0f) {
             tb = tc, sb = sc;
+            if (kept == 1) sa *= 0.5f;
+            kept = 1;
           } else {
             break;
           }
@@ -274,7 +358,7 @@ bool march(VolumeSampler& sampler, const Eigen::Vector3f& o_vox, const Eigen::Ve
 
 void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
              const RaycastOptions& options, RaycastResult* out) {
-  options.validate();
+  options.validate(camera);
   if (camera.width <= 0 || camera.height <= 0 || !(camera.fx > 0.0 && camera.fy > 0.0))
     throw Error("raycast: expected a camera with positive size and focal lengths, got " + camera.describe());
   if (!T_world_camera.is_finite()) throw Error("raycast: expected a finite T_world_camera");
@@ -296,6 +380,7 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
   const Eigen::Vector3f o_vox = (T_world_camera.translation() / voxel_m).cast<float>() - Eigen::Vector3f::Constant(0.5f);
   const float step_fraction = float(options.step_fraction);
   const float min_step_m = float(options.min_step_vox * voxel_m);
+  const DepthImage* hint_image = options.depth_hint;
 
   // Depth range per 8 x 8 pixel tile (InfiniTAM's range image): a ray can only hit inside an allocated block, so
   // it starts at the nearest block its tile sees and stops after the farthest; tiles no block covers are not
@@ -366,13 +451,26 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
     const Eigen::Vector3f d_cam(float((x - camera.cx) / camera.fx), float((y - camera.cy) / camera.fy), 1.0f);
     const float len = d_cam.norm();
     const Eigen::Vector3f u_world = R * (d_cam / len);
+    const Eigen::Vector3f d_vox = u_world / float(voxel_m);
     Hit hit;
-    const size_t tile = size_t(y / kTile) * TW + size_t(x / kTile);
-    // One voxel of slack on both sides covers float rounding of the corner projections.
-    const float z0 = std::max(float(options.min_depth_m), tile_near[tile] - float(voxel_m));
-    const float z1 = std::min(float(options.max_depth_m), tile_far[tile] + float(voxel_m));
-    const bool found = z0 < z1 && march(sampler, o_vox, u_world / float(voxel_m), z0 * len, z1 * len, mu_m,
-                                        step_fraction, min_step_m, float(voxel_m), &hit);
+    bool found = false;
+    const float hint = hint_image != nullptr ? (*hint_image)(x, y) : 0.0f;
+    if (hint > 0.0f && std::isfinite(hint)) {
+      // The bracket around the depth this frame measured: a + to - crossing there is the surface.
+      const float w = hf_raycast_hint_halfwidth(hint, mu_m, float(voxel_m));
+      const float z0 = std::max(float(options.min_depth_m), hint - w);
+      const float z1 = std::min(float(options.max_depth_m), hint + w);
+      found = z0 < z1 && march(sampler, o_vox, d_vox, z0 * len, z1 * len, mu_m, step_fraction, min_step_m,
+                               float(voxel_m), &hit);
+    }
+    if (!found) {
+      const size_t tile = size_t(y / kTile) * TW + size_t(x / kTile);
+      // One voxel of slack on both sides covers float rounding of the corner projections.
+      const float z0 = std::max(float(options.min_depth_m), tile_near[tile] - float(voxel_m));
+      const float z1 = std::min(float(options.max_depth_m), tile_far[tile] + float(voxel_m));
+      found = z0 < z1 && march(sampler, o_vox, d_vox, z0 * len, z1 * len, mu_m, step_fraction, min_step_m,
+                               float(voxel_m), &hit);
+    }
     if (!found) {
       out->depth(x, y) = 0.0f;
       out->vertices(x, y) = hf_invalid4();

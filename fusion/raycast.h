@@ -12,8 +12,11 @@
 // the surface it takes steps of step_fraction * sdf * mu (at least min_step_vox voxels), sampling the trilinearly
 // interpolated SDF. The first sign change from + to - is the surface (a change from - to +, seen when a
 // ray leaves the back of a surface, is ignored); the crossing is refined by linear interpolation of the two
-// bracketing samples (then two regula-falsi steps on the same bracket). Normals are the normalised SDF gradient
-// by central differences of trilinear samples one voxel apart; colour is trilinear.
+// bracketing samples, then Illinois regula falsi on the same bracket until it is below 0.001 voxel. Normals are
+// the normalised SDF gradient by central differences of trilinear samples one voxel apart (taken from one gathered
+// neighbourhood of 32 voxels, VolumeSampler::normal); colour is trilinear. With RaycastOptions::depth_hint (the
+// depth just integrated from the same pose, as a SLAM pipeline has it) each ray first searches a narrow bracket
+// around the hinted depth.
 //
 // Outputs are in the CAMERA frame (x right, y down, z forward, metres); depth is z along the optical axis, like a
 // depth image. Pixels without a hit have depth 0, vertex/normal w = 0, colour black. A hit whose gradient cannot
@@ -129,21 +132,27 @@ class VolumeSampler {
     }
     return region_;
   }
-  bool observed(const Voxel* v) const { return v != nullptr && v->weight != 0 && v->weight >= min_weight_raw_; }
+  bool observed(const Voxel* v) const { return v != nullptr && v->weight >= min_weight_raw_; }
 
   // Trilinear normalised SDF at p_vox; false when any of the eight voxels is unobserved.
   bool sdf(const Eigen::Vector3f& p_vox, float* sdf);
   // The same plus trilinear colour (0..255 per channel).
   bool sdf_color(const Eigen::Vector3f& p_vox, float* sdf, Eigen::Vector3f* rgb);
   // Unit SDF gradient (pointing into free space) by central differences of trilinear samples h_vox apart; false
-  // when a sample is unobserved or the gradient vanishes.
+  // when a sample is unobserved or the gradient vanishes. For h_vox = 1 the six samples share their fractional
+  // offset, so their 48 corners are 32 voxels of the 4 x 4 x 4 neighbourhood of p_vox: those are gathered once
+  // (row by row within a block) instead of six separate trilinear look-ups.
   bool normal(const Eigen::Vector3f& p_vox, Eigen::Vector3f* n, float h_vox = 1.0f);
 
  private:
   bool corners(const Eigen::Vector3f& p_vox, const Voxel* v[8], float f[3]);
+  // Raw (int16 as float) SDF of voxels (i .. i + N - 1, j, k) into out; false when one is unobserved.
+  template <int N>
+  bool row(int i, int j, int k, float* out);
+  bool normal_one_voxel(const Eigen::Vector3f& p_vox, Eigen::Vector3f* n);
 
   const BlockLookup* lookup_;
-  std::uint16_t min_weight_raw_;
+  std::uint16_t min_weight_raw_;  // >= 1: weight 0 (never observed) is always unobserved
   struct CacheEntry {
     int x = -2147483647 - 1, y = 0, z = 0;  // nothing cached yet (block x never reaches INT_MIN)
     const VoxelBlock* block = nullptr;
@@ -160,9 +169,26 @@ struct RaycastOptions {
   double min_step_vox = 0.5;     // lower bound of the fine step, in voxels
   float min_weight = 0.0f;       // voxels with a smaller weight count as unobserved (weight 0 always does)
   bool shade = true;             // fill RaycastResult::shaded
+  // The depth image just integrated from this same pose (same size as the camera; metres along the optical axis,
+  // 0 = none), or nullptr. Not owned; must outlive the raycast() call. A ray whose pixel has a hint d > 0 first
+  // searches the bracket [d - w, d + w], w = mu + 2 voxels + 3 sigma_z(d) (hf_raycast_hint_halfwidth in
+  // fusion/kernels/raycast_kernels.h: sigma_z is the Kinect's axial noise at d), starting at d - w; when that
+  // bracket holds no + to - crossing, or the pixel has no hint (0, negative or not finite), the ray marches from
+  // min_depth_m as without a hint. Most rays then take a handful of samples instead of crossing the free space in
+  // front of the surface.
+  //   The semantic difference: without a hint the result is the FIRST + to - crossing along the ray; with one, a
+  // surface more than w in front of the hinted depth is skipped when the bracket holds a crossing. At the pose the
+  // hint was integrated from, that is space the frame has just measured through (carved as free), so only stale
+  // model surface there (or a sliver at a silhouette, where trilinear interpolation spans both sides of a depth
+  // edge) is skipped. Where both find the same crossing they agree to within 0.01 voxel in depth and 0.5 degrees
+  // in normal (the crossing is refined to 0.001 voxel); measured on fused sphere and noisy room scenes, 0.1-0.2 %
+  // of the pixels differ, at silhouettes and on noisy grazing surfaces (tests/fusion/test_raycast.cpp).
+  const DepthImage* depth_hint = nullptr;
   // Throws hf::Error naming the bad field: 0 < min_depth_m < max_depth_m (finite), step_fraction in (0, 1),
   // min_step_vox in (0, 4], min_weight >= 0.
   void validate() const;
+  // The same, plus: a depth_hint must have the camera's size.
+  void validate(const PinholeCamera& camera) const;
 };
 
 struct RaycastResult {

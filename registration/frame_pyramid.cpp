@@ -35,6 +35,8 @@ void add_intensity(FramePyramid& pyramid, const IntensityImage& level0) {
 FramePyramid build_frame_pyramid(const DepthImage& depth, const ColorImage* color, const PinholeCamera& camera,
                                  const FramePyramidOptions& options) {
   if (options.levels < 1) throw Error("frame pyramid: levels must be >= 1, got " + std::to_string(options.levels));
+  if (options.first_level < 0 || options.first_level > 4)
+    throw Error("frame pyramid: first_level must be in [0, 4], got " + std::to_string(options.first_level));
   check_size(depth.width(), depth.height(), camera, "the depth image");
   if (color != nullptr) check_size(color->width(), color->height(), camera, "the colour image");
 
@@ -44,6 +46,7 @@ FramePyramid build_frame_pyramid(const DepthImage& depth, const ColorImage* colo
                       (options.max_depth_m <= 0.0f || z <= options.max_depth_m);
     if (!keep) z = 0.0f;
   }
+  for (int l = 0; l < options.first_level; ++l) d = pyr_down_depth(d);
   if (options.bilateral_filter) d = bilateral_filter_depth(d);
   const std::vector<DepthImage> depths = build_depth_pyramid(d, options.levels);
 
@@ -51,11 +54,15 @@ FramePyramid build_frame_pyramid(const DepthImage& depth, const ColorImage* colo
   pyramid.levels.resize(size_t(options.levels));
   for (int l = 0; l < options.levels; ++l) {
     FramePyramidLevel& level = pyramid.levels[size_t(l)];
-    level.camera = camera.scaled(l);
+    level.camera = camera.scaled(options.first_level + l);
     level.vertices = compute_vertex_map(depths[size_t(l)], level.camera);
     level.normals = compute_normal_map(level.vertices);
   }
-  if (color != nullptr) add_intensity(pyramid, intensity_from_color(*color));
+  if (color != nullptr) {
+    IntensityImage intensity = intensity_from_color(*color);
+    for (int l = 0; l < options.first_level; ++l) intensity = pyr_down_gaussian(intensity);
+    add_intensity(pyramid, intensity);
+  }
   return pyramid;
 }
 

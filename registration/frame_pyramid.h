@@ -37,6 +37,11 @@ struct FramePyramidOptions {
                                    // (core/filters.h defaults: 7x7 window, sigma_s 4.5 px, sigma_r 30 mm)
   float max_depth_m = 0.0f;        // depths beyond this are dropped (0 = keep all)
   float min_depth_m = 0.0f;        // depths below this are dropped
+  // Build only from this level of the input down: the result's level 0 has camera.scaled(first_level). The depth is
+  // first halved first_level times (depth-aware, core/pyramid.h) and the bilateral filter runs at that resolution;
+  // intensity is Gaussian-downsampled the same number of times. Tracking at 320x240 from a 640x480 sensor thus
+  // never pays for full-resolution filtering, vertex and normal maps.
+  int first_level = 0;
 };
 
 // From a depth image (metres, 0/NaN invalid) and an optional colour image of the same size (nullptr: no

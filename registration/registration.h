@@ -130,9 +130,12 @@ struct RegistrationOptions {
   double verify_motion_deg = 10.0;
   double verify_agreement_m = 0.01;
   double verify_agreement_deg = 0.5;
-  // The last finest-level step must be below these, else the estimate was still sliding: failed.
-  double max_final_step_translation_m = 2e-4;
-  double max_final_step_rotation_rad = 2e-4;
+  // The last finest-level step must be below these, else the estimate was still sliding: failed. On real frames
+  // the IRLS weights change a little every iteration, so the last step of a converged solve sits near 1e-4 (fr1/rpy
+  // at 320x240: 43 of 150 frames ended with steps of 1.4e-4 m / 2e-4 rad, which 2e-4 thresholds rejected as
+  // failures); sliding means steps of millimetres and tenths of a degree.
+  double max_final_step_translation_m = 2e-3;
+  double max_final_step_rotation_rad = 2e-3;
 
   // Throws hf::Error naming the first bad field.
   void validate() const;

@@ -140,6 +140,7 @@ void visit_scalars(V&& v, PipelineConfig& c) {
   v("registration", c.registration);
   v("backend", c.backend);
   v("tracking_level", c.tracking_level);
+  v("rgb_weight", c.rgb_weight);
   v("constant_velocity", c.constant_velocity);
   v("max_speed_m_per_s", c.max_speed_m_per_s);
   v("max_angular_speed_deg_per_s", c.max_angular_speed_deg_per_s);
@@ -170,7 +171,9 @@ void section_from_json(const nlohmann::json& j, const std::string& where, S& s) 
 
 RegistrationOptions effective_registration_options(const PipelineConfig& c) {
   if (c.registration_options) return *c.registration_options;
-  return default_registration_options(c.registration);
+  RegistrationOptions o = default_registration_options(c.registration);
+  o.rgb_weight = c.rgb_weight;
+  return o;
 }
 
 // Share of the frame's depth that agrees with the model depth where it lands (see PipelineConfig::min_consistent):
@@ -228,6 +231,7 @@ void PipelineConfig::validate() const {
     throw Error("integrate.observation_weight must be positive");
   if (pyramid.levels < 1 || pyramid.levels > 6) throw Error("pyramid.levels must be in [1, 6]");
   if (tracking_level < 0 || tracking_level > 2) throw Error("tracking_level must be 0, 1 or 2");
+  if (!(rgb_weight >= 0 && std::isfinite(rgb_weight))) throw Error("rgb_weight must be finite and >= 0");
   if (registration_options) registration_options->validate();
   if (!(max_speed_m_per_s > 0)) throw Error("max_speed_m_per_s must be positive");
   if (!(max_angular_speed_deg_per_s > 0)) throw Error("max_angular_speed_deg_per_s must be positive");
@@ -271,7 +275,7 @@ PipelineConfig config_from_json(const nlohmann::json& j, const std::string& wher
   if (j.contains("pyramid")) section_from_json(j["pyramid"], where + ": pyramid", c.pyramid);
   if (j.contains("registration_options") && !j["registration_options"].is_null()) {
     RegistrationOptions r =
-        c.registration == "groundtruth" ? RegistrationOptions{} : default_registration_options(c.registration);
+        c.registration == "groundtruth" ? RegistrationOptions{} : effective_registration_options(c);
     section_from_json(j["registration_options"], where + ": registration_options", r);
     c.registration_options = r;
   }
@@ -384,9 +388,8 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
   {
     const auto t0 = std::chrono::steady_clock::now();
     FramePyramidOptions po = config_.pyramid;
-    po.levels += config_.tracking_level;
+    po.first_level = config_.tracking_level;
     current = build_frame_pyramid(frame.depth, has_color ? &frame.color : nullptr, camera_, po);
-    current.levels.erase(current.levels.begin(), current.levels.begin() + config_.tracking_level);
     r.ms.preprocess = ms_since(t0);
   }
 
@@ -398,7 +401,18 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
     const bool poor = r.registration && r.registration->status == RegistrationStatus::poor;
     if (!poor || config_.integrate_poor) integrate_at(T_world_cur);
     const auto t0 = std::chrono::steady_clock::now();
-    fusion::raycast(grid_, tracking_camera_, T_world_cur, config_.raycast, &reference_->model);
+    // The frame just integrated from this pose tells each ray where the surface is (fusion/raycast.h depth_hint):
+    // its depth at the tracking resolution, from the pyramid's vertices.
+    fusion::RaycastOptions ro = config_.raycast;
+    DepthImage hint;
+    if (r.integrated && !current.levels.empty()) {
+      const VertexMap& v = current.levels[0].vertices;
+      hint = DepthImage(v.width(), v.height(), 0.0f);
+      for (int y = 0; y < v.height(); ++y)
+        for (int x = 0; x < v.width(); ++x) hint(x, y) = v(x, y).w != 0.0f ? v(x, y).z : 0.0f;
+      ro.depth_hint = &hint;
+    }
+    fusion::raycast(grid_, tracking_camera_, T_world_cur, ro, &reference_->model);
     reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
                                               tracking_camera_, config_.pyramid.levels);
     reference_->last_frame = std::move(current);

@@ -35,6 +35,19 @@ HF_INLINE float hf_raycast_step(float sdf, float mu, float step_fraction, float 
   return s > min_step_m ? s : min_step_m;
 }
 
+// Half-width in metres of the bracket [d - w, d + w] a ray searches first when the depth image just integrated from
+// the same pose measured depth d there (RaycastOptions::depth_hint): w = mu + 2 voxels + 3 sigma_z(d), with
+// sigma_z(d) = 0.0012 + 0.0019 (d - 0.4)^2 m the Kinect's axial noise at normal incidence (Nguyen, Izadi and Lovell
+// 2012; datasets/sensor_noise.h). The fused zero crossing lies between d and the surface the earlier frames saw,
+// i.e. within the noise of d; mu in front guarantees the bracket starts in the positive band (the frame has just
+// written sdf = +1 there along this very ray), the 2 voxels cover the trilinear interpolation's reach across
+// voxel centres and the projective distance's bias.
+HF_INLINE float hf_raycast_hint_halfwidth(float d, float mu, float voxel) {
+  float e = d - 0.4f;
+  float sigma = 0.0012f + 0.0019f * e * e;
+  return mu + 2.0f * voxel + 3.0f * sigma;
+}
+
 // The unit normal from the SDF gradient by central differences: (dx, dy, dz) = f(p + h e_i) - f(p - h e_i); the
 // scale drops out. Invalid (w = 0) when the gradient vanishes.
 HF_INLINE hf_float4 hf_normal_from_differences(float dx, float dy, float dz) {

@@ -4,12 +4,17 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
+#include <utility>
+#include <vector>
 
 #include <tbb/global_control.h>
 
+#include "datasets/presets.h"
+#include "datasets/synthetic_sequence.h"
+#include "fusion/integrate.h"
 #include "fusion/kernels/raycast_kernels.h"
 #include "fusion/raycast.h"
-#include "datasets/presets.h"
 #include "tests/common/analytic_depth.h"
 
 namespace hf::fusion {
@@ -249,6 +254,134 @@ TEST(Raycast, EmptyGridAndBadInput) {
   const hf_float4* before = out.vertices.data();
   raycast(grid, kCamera, SE3(), RaycastOptions{}, &out);
   EXPECT_EQ(out.vertices.data(), before);
+}
+
+// How a raycast with RaycastOptions::depth_hint compares with the full march from the same pose. A pixel agrees
+// when both miss, or both hit with depths within kDepthTol_m and equally valid normals within kNormalTol_deg.
+// With the crossing refined to 0.001 voxel the two marches, which sample the same bracket at different points,
+// agree far more closely than that wherever they find the same crossing.
+constexpr double kDepthTol_m = 0.01 * 0.01;  // 0.01 voxel
+constexpr double kNormalTol_deg = 0.5;
+
+struct HintComparison {
+  int hits_plain = 0, hits_hint = 0;
+  std::vector<std::pair<int, int>> differ;  // pixels that do not agree
+};
+
+HintComparison compare_hint(const RaycastResult& plain, const RaycastResult& hinted) {
+  HintComparison c;
+  c.hits_plain = plain.hit_count;
+  c.hits_hint = hinted.hit_count;
+  for (int y = 0; y < plain.depth.height(); ++y)
+    for (int x = 0; x < plain.depth.width(); ++x) {
+      const float a = plain.depth(x, y), b = hinted.depth(x, y);
+      if (a == 0.0f && b == 0.0f) continue;
+      bool agree = a > 0.0f && b > 0.0f && std::abs(double(a) - double(b)) <= kDepthTol_m;
+      const hf_float4 na = plain.normals(x, y), nb = hinted.normals(x, y);
+      agree = agree && na.w == nb.w;
+      if (agree && na.w != 0.0f) {
+        const double dot = double(na.x) * nb.x + double(na.y) * nb.y + double(na.z) * nb.z;
+        agree = std::acos(std::clamp(dot, -1.0, 1.0)) * 180.0 / M_PI <= kNormalTol_deg;
+      }
+      if (!agree) c.differ.emplace_back(x, y);
+    }
+  return c;
+}
+
+// The SLAM pipeline's case on the sphere: fuse noise-free depth from a ring of poses, then raycast at the pose of
+// the frame just integrated with and without that frame's depth as the hint. They agree everywhere except at a
+// few silhouette pixels (grazing rays, where the fused field has more than one crossing within the bracket and
+// the marches meet different crossings or one of them an unobserved sample); measured: 10 of 7 832 hits, all
+// within 4 pixels of the silhouette.
+TEST(Raycast, DepthHintOnTheSphereMatchesTheFullMarch) {
+  const PinholeCamera camera = kCamera;
+  const Eigen::Vector3d c = datasets::kSphereCentre;
+  const double r = datasets::kSphereRadius_m;
+  VoxelBlockGrid grid(params_1cm());
+  const std::vector<SE3> poses = datasets::ring_poses(c, 1.4, 8);
+  DepthImage last;
+  for (const SE3& T : poses) {
+    last = testing::render_sphere_depth(camera, T, c, r);
+    integrate(grid, last, ColorImage(), camera, T);
+  }
+  RaycastOptions opts;
+  opts.shade = false;
+  const RaycastResult plain = raycast(grid, camera, poses.back(), opts);
+  opts.depth_hint = &last;
+  const RaycastResult hinted = raycast(grid, camera, poses.back(), opts);
+  const HintComparison cmp = compare_hint(plain, hinted);
+  ASSERT_GT(cmp.hits_plain, 3000);
+  EXPECT_LE(cmp.differ.size(), size_t(cmp.hits_plain / 250));
+  for (const auto& [x, y] : cmp.differ) {
+    bool silhouette = false;  // a pixel within 4 of it sees no sphere
+    for (int v = std::max(0, y - 4); v <= std::min(camera.height - 1, y + 4); ++v)
+      for (int u = std::max(0, x - 4); u <= std::min(camera.width - 1, x + 4); ++u) silhouette |= last(u, v) == 0.0f;
+    EXPECT_TRUE(silhouette) << x << "," << y << ": plain " << plain.depth(x, y) << " m, hinted " << hinted.depth(x, y);
+  }
+}
+
+// The same on the room preset with Kinect-like noise (depth edges, grazing walls, ten fused noisy frames): the
+// pixels that differ are a small fraction (measured: 36 of 19 200 = 0.19 %, at depth edges and on noisy grazing
+// surfaces where the two marches meet different crossings of a multi-crossing field).
+TEST(Raycast, DepthHintOnTheNoisyRoomMatchesTheFullMarch) {
+  datasets::SyntheticOptions o;
+  o.preset = "room";
+  o.frames = 40;
+  o.camera = kCamera;
+  const datasets::SyntheticSequence seq(o);
+  VoxelBlockGrid grid(params_1cm());
+  datasets::SyntheticFrame f;
+  for (int i = 0; i < 40; i += 4) {
+    f = seq.frame(i);
+    integrate(grid, f.depth, f.color, seq.camera(), f.T_world_camera);
+  }
+  RaycastOptions opts;
+  opts.shade = false;
+  const RaycastResult plain = raycast(grid, seq.camera(), f.T_world_camera, opts);
+  opts.depth_hint = &f.depth;
+  const RaycastResult hinted = raycast(grid, seq.camera(), f.T_world_camera, opts);
+  const HintComparison cmp = compare_hint(plain, hinted);
+  const int n = kCamera.width * kCamera.height;
+  ASSERT_GT(cmp.hits_plain, n * 9 / 10);
+  EXPECT_LE(cmp.differ.size(), size_t(n / 200));
+  EXPECT_NEAR(cmp.hits_hint, cmp.hits_plain, n / 500);
+}
+
+// A hint of zeros (no pixel hinted; negative, NaN and infinite values count as zero) is exactly no hint; a hint
+// of the wrong size is rejected.
+TEST(Raycast, DepthHintOfZerosIsNoHintAndWrongSizeThrows) {
+  VoxelBlockGrid grid(params_1cm());
+  const Eigen::Vector3d c(0.0131, -0.0217, 0.0073);
+  fill(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.4; }, c.array() - 0.5, c.array() + 0.5);
+  const SE3 T = datasets::look_at({1.1, 0.3, -0.6}, c);
+  const RaycastResult plain = raycast(grid, kCamera, T);
+  DepthImage zeros(kCamera.width, kCamera.height, 0.0f);
+  const float kNone[4] = {0.0f, -1.0f, std::numeric_limits<float>::quiet_NaN(),
+                          std::numeric_limits<float>::infinity()};
+  for (int y = 0; y < kCamera.height; ++y)
+    for (int x = 0; x < kCamera.width; ++x) zeros(x, y) = kNone[(x + y) % 4];
+  RaycastOptions opts;
+  opts.depth_hint = &zeros;
+  const RaycastResult hinted = raycast(grid, kCamera, T, opts);
+  ASSERT_GT(plain.hit_count, 1000);
+  EXPECT_EQ(hinted.hit_count, plain.hit_count);
+  for (int y = 0; y < kCamera.height; ++y)
+    for (int x = 0; x < kCamera.width; ++x) {
+      ASSERT_EQ(hinted.depth(x, y), plain.depth(x, y)) << x << "," << y;
+      EXPECT_EQ(hinted.normals(x, y).x, plain.normals(x, y).x);
+      EXPECT_EQ(hinted.normals(x, y).y, plain.normals(x, y).y);
+      EXPECT_EQ(hinted.normals(x, y).z, plain.normals(x, y).z);
+      EXPECT_EQ(hinted.normals(x, y).w, plain.normals(x, y).w);
+      EXPECT_EQ(hinted.color(x, y), plain.color(x, y));
+      EXPECT_EQ(hinted.shaded(x, y), plain.shaded(x, y));
+    }
+  const DepthImage wrong(kCamera.width / 2, kCamera.height, 1.0f);
+  opts.depth_hint = &wrong;
+  EXPECT_THROW(opts.validate(kCamera), Error);
+  EXPECT_NO_THROW(opts.validate());  // the size is only known with the camera
+  EXPECT_THROW(raycast(grid, kCamera, T, opts), Error);
+  opts.depth_hint = &zeros;
+  EXPECT_NO_THROW(opts.validate(kCamera));
 }
 
 }  // namespace

@@ -31,9 +31,17 @@ TEST(DatasetCamera, TumRulesInOrderWithTheirReasons) {
   const std::string folder = root / "rgbd_dataset_freiburg2_pioneer";
   std::filesystem::create_directories(folder);
 
+  // fr2 (and fr1): distorted images with pre-registered depth -> the ROS defaults, with the reason.
   hf::CameraChoice c = hf::choose_tum_camera(folder, "");
-  EXPECT_EQ(c.camera, hf::PinholeCamera::preset("fr2"));
-  EXPECT_TRUE(contains(c.origin, "preset fr2 (folder name 'rgbd_dataset_freiburg2_pioneer')")) << c.origin;
+  EXPECT_EQ(c.camera, hf::PinholeCamera::preset("ros"));
+  EXPECT_TRUE(contains(c.origin, "folder name 'rgbd_dataset_freiburg2_pioneer' is TUM fr2")) << c.origin;
+  {
+    const std::string fr3 = root / "rgbd_dataset_freiburg3_office";
+    std::filesystem::create_directories(fr3);
+    const hf::CameraChoice c3 = hf::choose_tum_camera(fr3, "");
+    EXPECT_EQ(c3.camera, hf::PinholeCamera::preset("fr3"));
+    EXPECT_TRUE(contains(c3.origin, "preset fr3 (folder name 'rgbd_dataset_freiburg3_office')")) << c3.origin;
+  }
 
   write_text(folder + "/camera.txt", "fx 100\nfy 101\ncx 50\ncy 40\nwidth 100\nheight 80\n");
   c = hf::choose_tum_camera(folder, "");
@@ -118,7 +126,8 @@ TEST(DatasetOpen, OpensBothFormatsWithAndWithoutPrefetch) {
     std::unique_ptr<hf::FrameSource> source = hf::open_dataset(tum, options);
     EXPECT_EQ(dynamic_cast<hf::PrefetchingSource*>(source.get()) != nullptr, prefetch > 0);
     EXPECT_EQ(source->size(), 3u);
-    EXPECT_EQ(source->camera(), hf::PinholeCamera::preset("fr1"));
+    // fr1 in the name: the ROS defaults (distorted images, pre-registered depth; see io/dataset.h), said why.
+    EXPECT_EQ(source->camera(), hf::PinholeCamera::preset("ros"));
     EXPECT_TRUE(contains(source->camera_origin(), "fr1"));
     EXPECT_TRUE(contains(source->name(), "TUM RGB-D"));
     for (size_t i = 0; i < 3; ++i) {
