@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -66,17 +67,31 @@ struct FromJson {
       if (!it->is_array()) throw Error(name + ": expected an array of integers");
       std::vector<int> v;
       for (const auto& e : *it) {
-        if (!e.is_number_integer()) throw Error(name + ": expected an array of integers");
-        v.push_back(e.get<int>());
+        if (!e.is_number_integer() || e.get<long long>() < -1000000 || e.get<long long>() > 1000000 ||
+            (e.is_number_unsigned() && e.get<unsigned long long>() > 1000000))
+          throw Error(name + ": expected an array of integers");
+        v.push_back(int(e.get<long long>()));
       }
       value = v;
     } else if constexpr (std::is_integral_v<T>) {
-      if (!it->is_number_integer() || (std::is_unsigned_v<T> && it->get<long long>() < 0))
-        throw Error(name + ": expected a" + std::string(std::is_unsigned_v<T> ? " non-negative" : "n") + " integer");
+      // Range-checked in the widest types, so no narrowing conversion ever runs on an out-of-range value.
+      bool ok = it->is_number_integer();
+      if (ok && it->is_number_unsigned()) {
+        ok = it->get<unsigned long long>() <= static_cast<unsigned long long>(std::numeric_limits<T>::max());
+      } else if (ok) {
+        const long long v = it->get<long long>();
+        ok = v >= static_cast<long long>(std::numeric_limits<T>::min()) &&
+             (v < 0 || static_cast<unsigned long long>(v) <= static_cast<unsigned long long>(std::numeric_limits<T>::max()));
+      }
+      if (!ok) throw Error(name + ": expected an integer in [" + std::to_string(std::numeric_limits<T>::min()) + ", " +
+                           std::to_string(std::numeric_limits<T>::max()) + "]");
       value = it->get<T>();
     } else {
       if (!it->is_number()) throw Error(name + ": expected a number");
-      value = it->get<T>();
+      const double v = it->get<double>();
+      if (!std::isfinite(v) || std::abs(v) > double(std::numeric_limits<T>::max()))
+        throw Error(name + ": number out of range");
+      value = static_cast<T>(v);
     }
   }
 };
@@ -292,7 +307,10 @@ PipelineConfig load_config(const std::string& path) {
   if (!in) throw Error(path + ": cannot open config file");
   std::stringstream ss;
   ss << in.rdbuf();
-  const std::string text = ss.str();
+  return parse_config(ss.str(), path);
+}
+
+PipelineConfig parse_config(const std::string& text, const std::string& path) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);
@@ -301,6 +319,8 @@ PipelineConfig load_config(const std::string& path) {
     size_t line = 1;
     for (size_t i = 0; i < e.byte && i < text.size(); ++i) line += text[i] == '\n';
     throw ParseError(path, line, "invalid JSON");
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path + ": invalid JSON (" + e.what() + ")");  // e.g. a number out of double range
   }
   return config_from_json(j, path);
 }

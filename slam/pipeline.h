@@ -103,6 +103,8 @@ nlohmann::json config_to_json(const PipelineConfig& config);
 PipelineConfig config_from_json(const nlohmann::json& j, const std::string& where);
 // Reads a JSON config file; errors name the file (and line for JSON syntax errors).
 PipelineConfig load_config(const std::string& path);
+// The same from the file's text; `name` stands for the file in messages.
+PipelineConfig parse_config(const std::string& text, const std::string& name);
 
 enum class TrackState {
   initialised,  // first frame: placed (ground truth or identity) and integrated
