@@ -5,13 +5,12 @@
 #include <cstdint>
 #include <cstdio>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
-#include "core/atomic_file.h"
 #include "core/error.h"
+#include "io/image_io.h"
 
 namespace hf {
 namespace {
@@ -367,21 +366,7 @@ ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, c
 
 void write_trajectory_plot(const std::string& path, const Trajectory& gt, const Trajectory& est,
                            const EvalResult& result, const TrajectoryPlotOptions& options) {
-  const ColorImage rgb = render_trajectory_plot(gt, est, result, options);
-  cv::Mat bgr(rgb.height(), rgb.width(), CV_8UC3);
-  for (int y = 0; y < rgb.height(); ++y) {
-    cv::Vec3b* row = bgr.ptr<cv::Vec3b>(y);
-    for (int x = 0; x < rgb.width(); ++x) row[x] = cv::Vec3b(rgb(x, y).b, rgb(x, y).g, rgb(x, y).r);
-  }
-  write_path_atomically(path, [&](const std::string& tmp_path) {
-    bool ok = false;
-    try {
-      ok = cv::imwrite(tmp_path, bgr);
-    } catch (const cv::Exception& e) {
-      throw Error(path + ": cannot encode the plot: " + e.what());
-    }
-    if (!ok) throw Error(path + ": cannot write the plot (unsupported extension or unwritable folder)");
-  });
+  write_color_png(path, render_trajectory_plot(gt, est, result, options));  // atomic, errors name the file (io/image_io.h)
 }
 
 }  // namespace hf
