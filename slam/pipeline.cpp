@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/kernels/image_kernels.h"
 #include "fusion/mesh.h"
 
 namespace hf::slam {
@@ -210,15 +211,13 @@ Consistency depth_consistency(const VertexMap& current, const fusion::RaycastRes
       ++c.sampled;
       const Eigen::Vector3f p = R * Eigen::Vector3f(v.x, v.y, v.z) + t;
       if (!(p.z() > 0.0f)) continue;
-      const int u = int(std::lround(cam.fx * p.x() / p.z() + cam.cx));
-      const int w = int(std::lround(cam.fy * p.y() / p.z() + cam.cy));
+      const Eigen::Vector2d px = cam.project(p.cast<double>());
+      const int u = int(std::lround(px.x())), w = int(std::lround(px.y()));
       if (u < 0 || w < 0 || u >= cam.width || w >= cam.height) continue;
       const float d_model = model.depth(u, w);
       if (!(d_model > 0.0f)) continue;
       ++c.overlap;
-      const double z = p.z();
-      const double sigma = 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4);
-      c.consistent += std::abs(double(d_model) - z) <= 3.0 * sigma + voxel_m;
+      c.consistent += std::abs(d_model - p.z()) <= 3.0f * hf_kinect_axial_sigma_m(p.z()) + float(voxel_m);
     }
   }
   return c;
@@ -342,7 +341,6 @@ const char* to_string(TrackState state) {
 struct Pipeline::Reference {
   fusion::RaycastResult model;   // raycast of the map at the last good pose
   FramePyramid pyramid;          // model vertices/normals per level + the last good frame's intensity/gradients
-  FramePyramid last_frame;       // the last good frame's own pyramid (its intensity levels feed `pyramid`)
   bool valid = false;
 };
 
@@ -435,13 +433,13 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
     fusion::raycast(grid_, tracking_camera_, T_world_cur, ro, &reference_->model);
     reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
                                               tracking_camera_, config_.pyramid.levels);
-    reference_->last_frame = std::move(current);
-    for (int l = 0; l < reference_->pyramid.num_levels() && l < reference_->last_frame.num_levels(); ++l) {
+    // The frame's intensity levels become the photometric reference; nothing else of it is needed again.
+    for (int l = 0; l < reference_->pyramid.num_levels() && l < current.num_levels(); ++l) {
       FramePyramidLevel& dst = reference_->pyramid.levels[size_t(l)];
-      const FramePyramidLevel& src = reference_->last_frame.levels[size_t(l)];
-      dst.intensity = src.intensity;
-      dst.grad_x = src.grad_x;
-      dst.grad_y = src.grad_y;
+      FramePyramidLevel& src = current.levels[size_t(l)];
+      dst.intensity = std::move(src.intensity);
+      dst.grad_x = std::move(src.grad_x);
+      dst.grad_y = std::move(src.grad_y);
     }
     reference_->valid = reference_->model.hit_count > 0;
     r.ms.raycast = ms_since(t0);

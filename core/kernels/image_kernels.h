@@ -23,6 +23,15 @@ HF_INLINE int hf_maxi(int a, int b) { return a > b ? a : b; }
 // values from foreign loaders are treated the same way).
 HF_INLINE int hf_depth_is_valid(float d) { return hf_isfinite(d) && d > 0.0f; }
 
+// The Kinect's axial depth noise at normal incidence, sigma_z(z) = 0.0012 + 0.0019 (z - 0.4)^2 metres (Nguyen, Izadi
+// and Lovell 2012), the one noise model tolerances on measured depth derive from (the raycast's depth-hint
+// bracket, the pipeline's depth-consistency test). datasets/sensor_noise.h simulates the full model, with its
+// incidence-angle term.
+HF_INLINE float hf_kinect_axial_sigma_m(float z) {
+  float e = z - 0.4f;
+  return 0.0012f + 0.0019f * e * e;
+}
+
 // Weights of the 6-tap binomial [1 5 10 10 5 1] / 32 at offsets -2..3 from 2x. It is the 5-tap binomial
 // [1 4 6 4 1] / 16 blur followed by the 2x2 block average that the pyramid geometry above asks for
 // ([1 4 6 4 1] * [1 1] = [1 5 10 10 5 1]), so the decimated sample sits at 2x + 0.5, not at 2x as in

@@ -8,6 +8,7 @@
 #define HF_FUSION_KERNELS_RAYCAST_KERNELS_H
 
 #include "core/kernels/cl_compat.h"
+#include "core/kernels/image_kernels.h"
 
 // Trilinear interpolation of eight corner values; cXYZ is the corner at offset (X, Y, Z).
 HF_INLINE float hf_trilinear(float c000, float c100, float c010, float c110, float c001, float c101, float c011,
@@ -37,15 +38,13 @@ HF_INLINE float hf_raycast_step(float sdf, float mu, float step_fraction, float 
 
 // Half-width in metres of the bracket [d - w, d + w] a ray searches first when the depth image just integrated from
 // the same pose measured depth d there (RaycastOptions::depth_hint): w = mu + 2 voxels + 3 sigma_z(d), with
-// sigma_z(d) = 0.0012 + 0.0019 (d - 0.4)^2 m the Kinect's axial noise at normal incidence (Nguyen, Izadi and Lovell
-// 2012; datasets/sensor_noise.h). The fused zero crossing lies between d and the surface the earlier frames saw,
+// sigma_z(d) = 0.0012 + 0.0019 (d - 0.4)^2 m the Kinect's axial noise at normal incidence (hf_kinect_axial_sigma_m,
+// core/kernels/image_kernels.h). The fused zero crossing lies between d and the surface the earlier frames saw,
 // i.e. within the noise of d; mu in front guarantees the bracket starts in the positive band (the frame has just
 // written sdf = +1 there along this very ray), the 2 voxels cover the trilinear interpolation's reach across
 // voxel centres and the projective distance's bias.
 HF_INLINE float hf_raycast_hint_halfwidth(float d, float mu, float voxel) {
-  float e = d - 0.4f;
-  float sigma = 0.0012f + 0.0019f * e * e;
-  return mu + 2.0f * voxel + 3.0f * sigma;
+  return mu + 2.0f * voxel + 3.0f * hf_kinect_axial_sigma_m(d);
 }
 
 // The unit normal from the SDF gradient by central differences: (dx, dy, dz) = f(p + h e_i) - f(p - h e_i); the
