@@ -68,10 +68,12 @@ std::vector<Eigen::Vector3f> points_of(const VertexMap& v) {
 }
 
 Pair make_pair_of(const DepthImage& d_ref, const ColorImage& c_ref, const SE3& T_w_ref, const DepthImage& d_cur,
-                  const ColorImage& c_cur, const SE3& T_w_cur, const PinholeCamera& camera) {
+                  const ColorImage& c_cur, const SE3& T_w_cur, const PinholeCamera& camera, int first_level = 0) {
   Pair p;
-  p.ref = build_frame_pyramid(d_ref, &c_ref, camera);
-  p.cur = build_frame_pyramid(d_cur, &c_cur, camera);
+  FramePyramidOptions options;
+  options.first_level = first_level;
+  p.ref = build_frame_pyramid(d_ref, &c_ref, camera, options);
+  p.cur = build_frame_pyramid(d_cur, &c_cur, camera, options);
   p.T_ref_cur_true = T_w_ref.inverse() * T_w_cur;
   p.ref_points = points_of(p.ref.levels[0].vertices);
   p.cur_points = points_of(p.cur.levels[0].vertices);
@@ -79,7 +81,7 @@ Pair make_pair_of(const DepthImage& d_ref, const ColorImage& c_ref, const SE3& T
 }
 
 // Consecutive frames k, k+1 of the synthetic room (with sensor noise), 640x480.
-PairSet synthetic_pairs(int count) {
+PairSet synthetic_pairs(int count, int first_level = 0) {
   datasets::SyntheticOptions options;
   options.preset = "room";
   options.frames = count + 1;
@@ -89,7 +91,7 @@ PairSet synthetic_pairs(int count) {
   for (int i = 1; i <= count; ++i) {
     datasets::SyntheticFrame next = seq.frame(i);
     set.pairs.push_back(make_pair_of(prev.depth, prev.color, prev.T_world_camera, next.depth, next.color,
-                                     next.T_world_camera, seq.camera()));
+                                     next.T_world_camera, seq.camera(), first_level));
     prev = std::move(next);
   }
   return set;
@@ -315,9 +317,13 @@ int run_lambda_sweep(int max_pairs) {
 
 // ---- Google Benchmark timings on one synthetic pair ------------------------------------------------------------
 
-const Pair& bench_pair() {
-  static const Pair pair = std::move(synthetic_pairs(1).pairs.front());
-  return pair;
+// The first pair of the room; first_level 1 builds its pyramids from 320x240 as the SLAM pipeline's default
+// tracking_level does (slam/pipeline.h).
+const Pair& bench_pair(int first_level = 0) {
+  static const Pair pair0 = std::move(synthetic_pairs(1).pairs.front());
+  if (first_level == 0) return pair0;
+  static const Pair pair1 = std::move(synthetic_pairs(1, 1).pairs.front());
+  return pair1;
 }
 
 void BM_BuildFramePyramid(benchmark::State& state) {
@@ -329,7 +335,7 @@ void BM_BuildFramePyramid(benchmark::State& state) {
 }
 BENCHMARK(BM_BuildFramePyramid)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-void BM_Align(benchmark::State& state, const std::string& method, const std::string& backend) {
+void BM_Align(benchmark::State& state, const std::string& method, const std::string& backend, int first_level) {
   std::unique_ptr<Registration> reg;
   try {
     reg = make_registration(method, backend);
@@ -337,7 +343,7 @@ void BM_Align(benchmark::State& state, const std::string& method, const std::str
     state.SkipWithError(e.what());
     return;
   }
-  const Pair& p = bench_pair();
+  const Pair& p = bench_pair(first_level);
   RegistrationResult res;
   for (auto _ : state) res = reg->align(p.cur, p.ref, SE3());
   const Errors e = error_of(res.T_ref_cur, p.T_ref_cur_true);
@@ -345,6 +351,9 @@ void BM_Align(benchmark::State& state, const std::string& method, const std::str
       double(std::accumulate(res.iterations_per_level.begin(), res.iterations_per_level.end(), 0));
   state.counters["t_err_mm"] = e.t_mm;
   state.counters["r_err_deg"] = e.r_deg;
+  for (size_t l = 0; l < res.iterations_per_level.size(); ++l) {
+    state.counters["it_l" + std::to_string(l)] = double(res.iterations_per_level[l]);
+  }
 }
 
 // One reduction (one Gauss-Newton iteration's normal equations) at level 0, inputs already on the device.
@@ -430,7 +439,13 @@ void register_benchmarks() {
   }
   for (const std::string& method : registration_names()) {
     for (const std::string& backend : backend_names()) {
-      benchmark::RegisterBenchmark(("BM_Align/" + method + "/" + backend).c_str(), BM_Align, method, backend)
+      benchmark::RegisterBenchmark(("BM_Align/" + method + "/" + backend).c_str(), BM_Align, method, backend, 0)
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()
+          ->MinTime(1.0);
+      // The same 640x480 frames, registered from 320x240 (the pipeline's tracking_level 1).
+      benchmark::RegisterBenchmark(("BM_AlignFromLevel1/" + method + "/" + backend).c_str(), BM_Align, method,
+                                   backend, 1)
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime()
           ->MinTime(1.0);

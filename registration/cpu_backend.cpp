@@ -6,11 +6,13 @@
 #include <algorithm>
 
 #include "core/error.h"
+#include "registration/cpu_backend_avx2.h"
 #include "registration/kernels/residuals.h"
 
 namespace hf {
 
-CpuReductionBackend::CpuReductionBackend(int rows_per_chunk) : rows_per_chunk_(std::max(1, rows_per_chunk)) {}
+CpuReductionBackend::CpuReductionBackend(int rows_per_chunk, bool vectorised)
+    : rows_per_chunk_(std::max(1, rows_per_chunk)), vectorised_(vectorised && detail::cpu_has_avx2()) {}
 
 NormalEquations CpuReductionBackend::reduce(const ResidualProblem& problem) {
   validate_problem(problem);
@@ -23,6 +25,10 @@ NormalEquations CpuReductionBackend::reduce(const ResidualProblem& problem) {
     for (int c = range.begin(); c != range.end(); ++c) {
       double* sums = chunk_sums_.data() + size_t(c) * HF_REG_SUMS;
       const int y0 = c * rows_per_chunk_, y1 = std::min(height, y0 + rows_per_chunk_);
+      if (vectorised_) {
+        detail::accumulate_rows_avx2(p, y0, y1, sums);
+        continue;
+      }
       // Photometric pixels off the photometric_step grid give no rows (hf_reg_pixel); skipping them here only
       // saves the calls.
       for (int y = y0; y < y1; ++y) {
