@@ -484,7 +484,7 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
     out->vertices(x, y) = hf_make_float4(d_cam.x() * z, d_cam.y() * z, z, 1.0f);
     float s = 0.0f;
     Eigen::Vector3f rgb(0.0f, 0.0f, 0.0f);
-    if (sampler.sdf_color(hit.p_vox, &s, &rgb)) {
+    if (options.color && sampler.sdf_color(hit.p_vox, &s, &rgb)) {
       auto to8 = [](float c) { return std::uint8_t(std::clamp(c + 0.5f, 0.0f, 255.0f)); };
       out->color(x, y) = Rgb8{to8(rgb.x()), to8(rgb.y()), to8(rgb.z())};
     } else {

@@ -169,6 +169,10 @@ struct RaycastOptions {
   double min_step_vox = 0.5;     // lower bound of the fine step, in voxels
   float min_weight = 0.0f;       // voxels with a smaller weight count as unobserved (weight 0 always does)
   bool shade = true;             // fill RaycastResult::shaded
+  // Fill RaycastResult::color (a trilinear colour sample per hit). Frame-to-model tracking does not read the
+  // model's colour (photometric rows align frame to frame, registration/photometric.h), so the SLAM pipeline's
+  // tracking raycast turns it off; the colour image is then black.
+  bool color = true;
   // The depth image just integrated from this same pose (same size as the camera; metres along the optical axis,
   // 0 = none), or nullptr. Not owned; must outlive the raycast() call. A ray whose pixel has a hint d > 0 first
   // searches the bracket [d - w, d + w], w = mu + 2 voxels + 3 sigma_z(d) (hf_raycast_hint_halfwidth in

@@ -384,5 +384,30 @@ TEST(Raycast, DepthHintOfZerosIsNoHintAndWrongSizeThrows) {
   EXPECT_NO_THROW(opts.validate(kCamera));
 }
 
+// color = false (the SLAM pipeline's tracking raycast) leaves the colour image black and changes nothing else.
+TEST(Raycast, WithoutColourTheGeometryIsUnchanged) {
+  VoxelBlockGrid grid(params_1cm());
+  const Eigen::Vector3d c(0.0131, -0.0217, 0.0073);
+  fill(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.4; }, c.array() - 0.5, c.array() + 0.5);
+  const SE3 T = datasets::look_at({1.1, 0.3, -0.6}, c);
+  const RaycastResult with = raycast(grid, kCamera, T);
+  RaycastOptions opts;
+  opts.color = false;
+  const RaycastResult without = raycast(grid, kCamera, T, opts);
+  ASSERT_GT(with.hit_count, 1000);
+  EXPECT_EQ(without.hit_count, with.hit_count);
+  int coloured = 0;
+  for (int y = 0; y < kCamera.height; ++y)
+    for (int x = 0; x < kCamera.width; ++x) {
+      ASSERT_EQ(without.depth(x, y), with.depth(x, y)) << x << "," << y;
+      EXPECT_EQ(without.normals(x, y).x, with.normals(x, y).x);
+      EXPECT_EQ(without.normals(x, y).w, with.normals(x, y).w);
+      EXPECT_EQ(without.shaded(x, y), with.shaded(x, y));
+      EXPECT_EQ(without.color(x, y), Rgb8{});
+      coloured += with.color(x, y) != Rgb8{} ? 1 : 0;
+    }
+  EXPECT_GT(coloured, with.hit_count / 2);  // fill() paints the sphere, so the comparison is not vacuous
+}
+
 }  // namespace
 }  // namespace hf::fusion
