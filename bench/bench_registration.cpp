@@ -356,11 +356,12 @@ void BM_Align(benchmark::State& state, const std::string& method, const std::str
   }
 }
 
-// One reduction (one Gauss-Newton iteration's normal equations) at level 0, inputs already on the device.
-ResidualProblem level0_problem(int method) {
+// One reduction (one Gauss-Newton iteration's normal equations) at pyramid level `level` of the 640x480 pair,
+// inputs already on the device.
+ResidualProblem level_problem(int method, int level = 0) {
   const Pair& pair = bench_pair();
-  const FramePyramidLevel& c = pair.cur.levels[0];
-  const FramePyramidLevel& r = pair.ref.levels[0];
+  const FramePyramidLevel& c = pair.cur.levels[size_t(level)];
+  const FramePyramidLevel& r = pair.ref.levels[size_t(level)];
   ResidualProblem p;
   p.camera = hf_intrinsics{float(c.camera.fx), float(c.camera.fy), float(c.camera.cx), float(c.camera.cy),
                            c.camera.width, c.camera.height};
@@ -388,8 +389,8 @@ ResidualProblem level0_problem(int method) {
   return p;
 }
 
-void run_reduce(benchmark::State& state, ReductionBackend& backend, int method) {
-  const ResidualProblem p = level0_problem(method);
+void run_reduce(benchmark::State& state, ReductionBackend& backend, int method, int level = 0) {
+  const ResidualProblem p = level_problem(method, level);
   NormalEquations ne = backend.reduce(p);  // uploads
   for (auto _ : state) ne = backend.reduce(p);
   state.counters["rows"] = double(ne.count);
@@ -397,7 +398,7 @@ void run_reduce(benchmark::State& state, ReductionBackend& backend, int method) 
 
 void BM_Reduce_cpu(benchmark::State& state, int method) {
   CpuReductionBackend backend;
-  run_reduce(state, backend, method);
+  run_reduce(state, backend, method, int(state.range(0)));
 }
 
 #ifdef HF_BENCH_HAVE_OPENCL
@@ -421,7 +422,10 @@ void register_benchmarks() {
   const std::pair<const char*, int> methods[] = {
       {"icp", HF_REG_ICP}, {"photometric", HF_REG_PHOTOMETRIC}, {"combined", HF_REG_COMBINED}};
   for (const auto& [name, id] : methods) {
+    // Argument: pyramid level (0 = 640x480).
     benchmark::RegisterBenchmark((std::string("BM_Reduce/") + name + "/cpu").c_str(), BM_Reduce_cpu, id)
+        ->Arg(0)
+        ->Arg(1)
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime();
 #ifdef HF_BENCH_HAVE_OPENCL
