@@ -208,6 +208,8 @@ void RaycastOptions::validate() const {
   if (!(min_step_vox > 0.0 && min_step_vox <= 4.0))
     fail("min_step_vox must be in (0, 4], got " + std::to_string(min_step_vox));
   if (!(min_weight >= 0.0f)) fail("min_weight must be >= 0, got " + std::to_string(min_weight));
+  if (!(refine_tol_vox > 0.0 && refine_tol_vox <= 1.0))
+    fail("refine_tol_vox must be in (0, 1], got " + std::to_string(refine_tol_vox));
 }
 
 void RaycastOptions::validate(const PinholeCamera& camera) const {
@@ -248,10 +250,10 @@ struct Hit {
 // such a cheap step, the ray goes back to where that step started and walks the stretch again with trilinear
 // samples only, so the bracket it refines is the one the all-trilinear march would have found.
 bool march(VolumeSampler& sampler, const Eigen::Vector3f& o_vox, const Eigen::Vector3f& d_vox, float t_min,
-           float t_max, float mu_m, float step_fraction, float min_step_m, float voxel_m, Hit* hit) {
+           float t_max, float mu_m, float step_fraction, float min_step_m, float voxel_m, float refine_tol_m,
+           Hit* hit) {
   constexpr float kFarSdf = 0.5f;
   constexpr int kRefineSteps = 6;
-  const float refine_tol_m = 1e-3f * voxel_m;
   const float far_margin_m = 0.8660254f * voxel_m;
   const bool cheap_steps = kFarSdf * mu_m - far_margin_m > min_step_m;
   // Block b holds continuous voxel coordinates [8 b - 0.5, 8 b + 7.5).
@@ -380,6 +382,7 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
   const Eigen::Vector3f o_vox = (T_world_camera.translation() / voxel_m).cast<float>() - Eigen::Vector3f::Constant(0.5f);
   const float step_fraction = float(options.step_fraction);
   const float min_step_m = float(options.min_step_vox * voxel_m);
+  const float refine_tol_m = float(options.refine_tol_vox * voxel_m);
   const DepthImage* hint_image = options.depth_hint;
 
   // Depth range per 8 x 8 pixel tile (InfiniTAM's range image): a ray can only hit inside an allocated block, so
@@ -461,7 +464,7 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
       const float z0 = std::max(float(options.min_depth_m), hint - w);
       const float z1 = std::min(float(options.max_depth_m), hint + w);
       found = z0 < z1 && march(sampler, o_vox, d_vox, z0 * len, z1 * len, mu_m, step_fraction, min_step_m,
-                               float(voxel_m), &hit);
+                               float(voxel_m), refine_tol_m, &hit);
     }
     if (!found) {
       const size_t tile = size_t(y / kTile) * TW + size_t(x / kTile);
@@ -469,7 +472,7 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
       const float z0 = std::max(float(options.min_depth_m), tile_near[tile] - float(voxel_m));
       const float z1 = std::min(float(options.max_depth_m), tile_far[tile] + float(voxel_m));
       found = z0 < z1 && march(sampler, o_vox, d_vox, z0 * len, z1 * len, mu_m, step_fraction, min_step_m,
-                               float(voxel_m), &hit);
+                               float(voxel_m), refine_tol_m, &hit);
     }
     if (!found) {
       out->depth(x, y) = 0.0f;

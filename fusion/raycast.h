@@ -168,6 +168,10 @@ struct RaycastOptions {
   double step_fraction = 0.8;    // fine step = step_fraction * |sdf| * mu; < 1 so no crossing is jumped over
   double min_step_vox = 0.5;     // lower bound of the fine step, in voxels
   float min_weight = 0.0f;       // voxels with a smaller weight count as unobserved (weight 0 always does)
+  // The crossing's bracket is refined (Illinois regula falsi, at most 6 samples) until it is narrower than this,
+  // in voxels. 0.001 makes the hinted and the full march return the same crossing (tests/fusion/test_raycast.cpp);
+  // a tracking raycast needs far less than the sensor's millimetres (slam/pipeline.h uses 0.05).
+  double refine_tol_vox = 1e-3;
   bool shade = true;             // fill RaycastResult::shaded
   // Fill RaycastResult::color (a trilinear colour sample per hit). Frame-to-model tracking does not read the
   // model's colour (photometric rows align frame to frame, registration/photometric.h), so the SLAM pipeline's
@@ -189,7 +193,7 @@ struct RaycastOptions {
   // of the pixels differ, at silhouettes and on noisy grazing surfaces (tests/fusion/test_raycast.cpp).
   const DepthImage* depth_hint = nullptr;
   // Throws hf::Error naming the bad field: 0 < min_depth_m < max_depth_m (finite), step_fraction in (0, 1),
-  // min_step_vox in (0, 4], min_weight >= 0.
+  // min_step_vox in (0, 4], min_weight >= 0, refine_tol_vox in (0, 1].
   void validate() const;
   // The same, plus: a depth_hint must have the camera's size.
   void validate(const PinholeCamera& camera) const;

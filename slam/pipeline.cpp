@@ -117,6 +117,7 @@ void visit(V&& v, fusion::RaycastOptions& p) {
   v("step_fraction", p.step_fraction);
   v("min_step_vox", p.min_step_vox);
   v("min_weight", p.min_weight);
+  v("refine_tol_vox", p.refine_tol_vox);
 }
 template <class V>
 void visit(V&& v, FramePyramidOptions& p) {
