@@ -3,8 +3,10 @@
 // sequences in ../shared/data, with PCL's GICP and NDT on the same pairs as reference rows.
 //
 //   build/release/bench/bench_registration                      # Google Benchmark timings (synthetic pair)
-//   build/release/bench/bench_registration --accuracy [--max-pairs N] [--pcl-pairs N]
-//                                                               # the accuracy tables (markdown on stdout)
+//   build/release/bench/bench_registration --accuracy [--max-pairs N] [--pcl-pairs N] [--first-level L]
+//                                                               # the accuracy tables (markdown on stdout); L = 1
+//                                                               # builds the pyramids from 320x240 as the SLAM
+//                                                               # pipeline's tracking_level 1 does
 //   build/release/bench/bench_registration --lambda-sweep [--max-pairs N]
 //                                                               # combined's rgb_weight on the TUM pairs
 //
@@ -98,7 +100,7 @@ PairSet synthetic_pairs(int count, int first_level = 0) {
 }
 
 // Consecutive frames of a TUM folder with ground truth for both.
-PairSet tum_pairs(const std::string& folder, int max_pairs) {
+PairSet tum_pairs(const std::string& folder, int max_pairs, int first_level = 0) {
   DatasetOptions options;
   options.prefetch_frames = 0;
   std::unique_ptr<FrameSource> source = open_dataset(folder, options);
@@ -113,7 +115,8 @@ PairSet tum_pairs(const std::string& folder, int max_pairs) {
     }
     if (prev) {
       set.pairs.push_back(make_pair_of(prev->depth, prev->color, *prev->T_world_camera_gt, read.frame.depth,
-                                       read.frame.color, *read.frame.T_world_camera_gt, source->camera()));
+                                       read.frame.color, *read.frame.T_world_camera_gt, source->camera(),
+                                       first_level));
     }
     prev = std::move(read.frame);
   }
@@ -225,18 +228,20 @@ void accuracy_table(const PairSet& set, int pcl_pairs) {
   }
 }
 
-int run_accuracy(int max_pairs, int pcl_pairs) {
-  std::printf("## Accuracy and time per registration (640x480, initial guess = identity, frame to frame)\n");
+int run_accuracy(int max_pairs, int pcl_pairs, int first_level) {
+  std::printf("## Accuracy and time per registration (640x480 frames, pyramids from level %d = %dx%d, initial "
+              "guess = identity, frame to frame)\n",
+              first_level, 640 >> first_level, 480 >> first_level);
   std::printf("\nms / registration: align() only (pyramids built beforehand), mean over the pairs. iterations: "
               "sum over the pyramid levels, mean. Errors: |t| and angle of T_true^-1 T_est.\n");
-  accuracy_table(synthetic_pairs(std::min(max_pairs, 20)), pcl_pairs);
+  accuracy_table(synthetic_pairs(std::min(max_pairs, 20), first_level), pcl_pairs);
   for (const char* name : {"tum_fr1_desk_9frames", "tum_fr1_rpy_first150"}) {
     const std::string folder = std::string(HF_SHARED_DIR) + "/data/" + name;
     if (!std::filesystem::exists(folder)) {
       std::printf("\n(%s missing: skipped)\n", folder.c_str());
       continue;
     }
-    accuracy_table(tum_pairs(folder, max_pairs), pcl_pairs);
+    accuracy_table(tum_pairs(folder, max_pairs, first_level), pcl_pairs);
   }
   return 0;
 }
@@ -462,7 +467,7 @@ void register_benchmarks() {
 
 int main(int argc, char** argv) {
   bool accuracy = false, lambda_sweep = false;
-  int max_pairs = 1000, pcl_pairs = 30;
+  int max_pairs = 1000, pcl_pairs = 30, first_level = 0;
   std::vector<char*> rest;
   for (int i = 0; i < argc; ++i) {
     if (std::strcmp(argv[i], "--accuracy") == 0) {
@@ -473,12 +478,14 @@ int main(int argc, char** argv) {
       max_pairs = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--pcl-pairs") == 0 && i + 1 < argc) {
       pcl_pairs = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--first-level") == 0 && i + 1 < argc) {
+      first_level = std::atoi(argv[++i]);
     } else {
       rest.push_back(argv[i]);
     }
   }
   try {
-    if (accuracy) return hf::run_accuracy(max_pairs, pcl_pairs);
+    if (accuracy) return hf::run_accuracy(max_pairs, pcl_pairs, first_level);
     if (lambda_sweep) return hf::run_lambda_sweep(max_pairs);
     int n = int(rest.size());
     hf::register_benchmarks();
