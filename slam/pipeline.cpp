@@ -109,6 +109,7 @@ void visit(V&& v, fusion::IntegrateParams& p) {
   v("min_depth_m", p.min_depth_m);
   v("max_depth_m", p.max_depth_m);
   v("observation_weight", p.observation_weight);
+  v("point_to_plane", p.point_to_plane);
 }
 template <class V>
 void visit(V&& v, fusion::RaycastOptions& p) {

@@ -72,7 +72,8 @@ TEST(Integrate, FrontoParallelPlaneGivesAnalyticSdf) {
   EXPECT_LT(max_err, 0.5 / HF_SDF_SCALE + 2e-5) << "max error " << max_err;
 }
 
-// A tilted plane seen from an offset, rotated camera: each observed voxel holds the projective TSDF
+// A tilted plane seen from an offset, rotated camera, projective distances (point_to_plane off): each observed voxel
+// holds the projective TSDF
 // min(1, (d(u) - z) / mu) with u the nearest pixel of the voxel centre and d(u) the exact ray-plane depth, and
 // the sign of the stored value agrees with the true signed distance away from the surface.
 TEST(Integrate, TiltedPlaneMatchesProjectiveTsdf) {
@@ -84,7 +85,9 @@ TEST(Integrate, TiltedPlaneMatchesProjectiveTsdf) {
   const SE3 T_world_camera(Eigen::Matrix3d(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY())),
                            Eigen::Vector3d(0.05, -0.03, 0.0));
   const DepthImage depth = render_plane_depth(camera, T_world_camera, n, offset);
-  integrate(grid, depth, ColorImage(), camera, T_world_camera);
+  IntegrateParams projective;
+  projective.point_to_plane = false;
+  integrate(grid, depth, ColorImage(), camera, T_world_camera, projective);
   const SE3 T_camera_world = T_world_camera.inverse();
   const double mu = volume.truncation_m();
   size_t checked = 0;
@@ -114,6 +117,113 @@ TEST(Integrate, TiltedPlaneMatchesProjectiveTsdf) {
   EXPECT_GT(checked, 10000u);
 }
 
+// hf_point_to_plane_factor on a tilted plane seen by a rotated camera: |n . (x/z, y/z, 1)| (n the unit normal in the
+// camera frame) at every pixel whose depth and neighbours are valid, by central differences inside and one-sided
+// differences beside holes and depth jumps (exact for a plane either way); 0 on the border, on invalid pixels and
+// where a direction has no usable neighbour.
+TEST(Integrate, PointToPlaneFactorOfAPlane) {
+  const PinholeCamera camera = small_camera();
+  const hf_intrinsics K = camera.kernel_intrinsics();
+  const Eigen::Vector3d n_world = Eigen::Vector3d(0.3, -0.2, -1.0).normalized();
+  const double offset = n_world.dot(Eigen::Vector3d(0.1, 0.0, 1.5));
+  const SE3 T_world_camera(Eigen::Matrix3d(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY())),
+                           Eigen::Vector3d(0.05, -0.03, 0.0));
+  DepthImage depth = render_plane_depth(camera, T_world_camera, n_world, offset);
+  const Eigen::Vector3d n = T_world_camera.rotation().transpose() * n_world;
+  auto exact = [&](int u, int v) {
+    return std::abs(n.dot(Eigen::Vector3d((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0)));
+  };
+  // Holes and edges: a hole at (50, 40); a NaN at (80, 60); a 0.5 m jump at (100, 70); both horizontal neighbours of
+  // (120, 90) gone.
+  const float mu = 0.04f;
+  depth(50, 40) = 0.0f;
+  depth(80, 60) = std::numeric_limits<float>::quiet_NaN();
+  depth(100, 70) += 0.5f;
+  depth(119, 90) = 0.0f;
+  depth(121, 90) = 0.0f;
+  double max_err = 0.0;
+  int checked = 0;
+  for (int v = 1; v < camera.height - 1; ++v)
+    for (int u = 1; u < camera.width - 1; ++u) {
+      const float f = hf_point_to_plane_factor(depth.data(), u, v, K, mu);
+      const bool bad = (u == 50 && v == 40) || (u == 80 && v == 60) || (u == 100 && v == 70) || (u == 120 && v == 90) ||
+                       depth(u, v) == 0.0f;
+      if (bad) {
+        EXPECT_EQ(f, 0.0f) << u << "," << v;
+        continue;
+      }
+      max_err = std::max(max_err, std::abs(f - exact(u, v)));
+      ++checked;
+    }
+  EXPECT_GT(checked, (camera.width - 2) * (camera.height - 2) - 10);
+  // Float depth (1e-7 m) over 1-2 pixel baselines of ~1 cm: ~1e-5 relative.
+  EXPECT_LT(max_err, 1e-4);
+  // Oblique: below 1 on this plane (about 0.95 at the centre).
+  EXPECT_LT(hf_point_to_plane_factor(depth.data(), 80, 61, K, mu), 0.99f);
+  for (int u = 0; u < camera.width; ++u) {
+    EXPECT_EQ(hf_point_to_plane_factor(depth.data(), u, 0, K, mu), 0.0f);
+    EXPECT_EQ(hf_point_to_plane_factor(depth.data(), u, camera.height - 1, K, mu), 0.0f);
+  }
+  EXPECT_EQ(hf_point_to_plane_factor(depth.data(), 0, 50, K, mu), 0.0f);
+  EXPECT_EQ(hf_point_to_plane_factor(depth.data(), camera.width - 1, 50, K, mu), 0.0f);
+}
+
+// The same tilted plane with point-to-plane distances: each observed voxel holds the true signed
+// distance (not the projective one) of the point where its pixel's ray reaches the voxel's depth, min(1, sdf / mu)
+// up to the factor's float error; against the voxel centre itself the difference is the lateral offset of that
+// point (at most half a pixel in u and v) along the normal.
+TEST(Integrate, TiltedPlaneGivesTrueDistanceWithPointToPlane) {
+  const PinholeCamera camera = small_camera();
+  const VolumeParams volume = params_1cm();
+  VoxelBlockGrid grid(volume);
+  const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.2, -1.0).normalized();
+  const double offset = n.dot(Eigen::Vector3d(0.1, 0.0, 1.5));
+  const SE3 T_world_camera(Eigen::Matrix3d(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY())),
+                           Eigen::Vector3d(0.05, -0.03, 0.0));
+  const DepthImage depth = render_plane_depth(camera, T_world_camera, n, offset);
+  IntegrateParams params;
+  params.point_to_plane = true;
+  integrate(grid, depth, ColorImage(), camera, T_world_camera, params);
+  const SE3 T_camera_world = T_world_camera.inverse();
+  const Eigen::Vector3d n_cam = T_camera_world.rotation() * n;
+  const double mu = volume.truncation_m();
+  size_t checked = 0, below_projective = 0;
+  double max_err = 0.0, max_lateral = 0.0;
+  for (const auto& [c, block] : grid.blocks()) {
+    for (int z = 0; z < 8; ++z)
+      for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) {
+          const Voxel& v = block->voxels[hf_voxel_index(x, y, z)];
+          if (v.weight == 0) continue;
+          const Eigen::Vector3d p_world = voxel_centre(volume, c, x, y, z);
+          const Eigen::Vector3d p = T_camera_world * p_world;
+          const Eigen::Vector2d px = camera.project(p);
+          const double fu = px.x() + 0.5 - std::floor(px.x() + 0.5), fv = px.y() + 0.5 - std::floor(px.y() + 0.5);
+          if (fu < 1e-3 || fu > 1 - 1e-3 || fv < 1e-3 || fv > 1 - 1e-3) continue;
+          const int u = int(std::floor(px.x() + 0.5)), w = int(std::floor(px.y() + 0.5));
+          if (u < 1 || w < 1 || u >= camera.width - 1 || w >= camera.height - 1) continue;  // border: projective
+          // The point of pixel (u, w)'s ray at the voxel's depth, and its true signed distance.
+          const Eigen::Vector3d q = camera.backproject(u, w, p.z());
+          const double sdf_q = n.dot(T_world_camera * q) - offset;
+          const double expected = std::clamp(sdf_q / mu, -1.0, 1.0);
+          max_err = std::max(max_err, std::abs(hf_voxel_sdf(v) - expected));
+          const double sdf_p = n.dot(p_world) - offset;
+          // Lateral offset q - p: at most half a pixel in u and v at depth p.z, seen along the normal.
+          const double lateral_bound =
+              (std::abs(n_cam.x()) / camera.fx + std::abs(n_cam.y()) / camera.fy) * 0.5 * p.z() + 1e-6;
+          max_lateral = std::max(max_lateral, std::abs(sdf_q - sdf_p) / lateral_bound);
+          below_projective += std::abs(hf_voxel_sdf(v)) < 0.99 * std::min(1.0, std::abs(depth(u, w) - p.z()) / mu);
+          ++checked;
+        }
+  }
+  EXPECT_GT(checked, 10000u);
+  // Half an int16 step + the factor's ~1e-5 relative error on distances up to a few mu.
+  EXPECT_LT(max_err, 0.5 / HF_SDF_SCALE + 1e-4) << "max error " << max_err;
+  EXPECT_LE(max_lateral, 1.0);
+  // Oblique view: in the band, the true distance is shorter than the projective one.
+  EXPECT_GT(below_projective, checked / 4);
+}
+
 // The 8-byte voxel against a float reference computing the same update on sample voxels through 12 noisy frames
 // of the sphere preset: the SDF stays within (n + 1) / 4 int16 steps (each update rounds by at most half a step
 // and the running average shrinks earlier errors), the weight is exact, the colour within (n + 1) / 4 + 1 levels.
@@ -136,7 +246,9 @@ TEST(Integrate, QuantisationCostsNoAccuracyAgainstFloatReference) {
   std::vector<Reference> refs;
   for (int f = 0; f < seq.size(); ++f) {
     const datasets::SyntheticFrame frame = seq.frame(f);
-    integrate(grid, frame.depth, frame.color, seq.camera(), frame.T_world_camera);
+    IntegrateParams projective;  // the float reference below computes projective distances
+    projective.point_to_plane = false;
+    integrate(grid, frame.depth, frame.color, seq.camera(), frame.T_world_camera, projective);
     if (f == 0) {  // sample voxels near the surface seen by the first frame
       for (const auto& [c, block] : grid.blocks()) {
         for (int idx = 0; idx < HF_VOXELS_PER_BLOCK; idx += 37) {
@@ -293,13 +405,13 @@ TEST(Integrate, KernelRejectsBehindSurfaceAndUpdatesFreeSpace) {
   const hf_intrinsics K{2.0f, 2.0f, 0.5f, 0.5f, 2, 2};
   hf_voxel v{};
   const float mu = 0.04f;
-  EXPECT_EQ(hf_integrate_voxel(&v, hf_make_float4(0, 0, 1.05f, 1), depth, nullptr, K, mu, 100.0f, 1.0f), 0);
+  EXPECT_EQ(hf_integrate_voxel(&v, hf_make_float4(0, 0, 1.05f, 1), depth, nullptr, nullptr, K, mu, 100.0f, 1.0f), 0);
   EXPECT_EQ(v.weight, 0);
-  EXPECT_EQ(hf_integrate_voxel(&v, hf_make_float4(0, 0, -1.0f, 1), depth, nullptr, K, mu, 100.0f, 1.0f), 0);
-  EXPECT_EQ(hf_integrate_voxel(&v, hf_make_float4(0, 0, 0.5f, 1), depth, nullptr, K, mu, 100.0f, 1.0f), 1);
+  EXPECT_EQ(hf_integrate_voxel(&v, hf_make_float4(0, 0, -1.0f, 1), depth, nullptr, nullptr, K, mu, 100.0f, 1.0f), 0);
+  EXPECT_EQ(hf_integrate_voxel(&v, hf_make_float4(0, 0, 0.5f, 1), depth, nullptr, nullptr, K, mu, 100.0f, 1.0f), 1);
   EXPECT_EQ(v.sdf, 32767);  // carved: truncated at +1
   EXPECT_EQ(v.flags, 0);    // no colour given
-  EXPECT_EQ(hf_integrate_voxel(&v, hf_make_float4(0, 0, 1.02f, 1), depth, nullptr, K, mu, 100.0f, 1.0f), 1);
+  EXPECT_EQ(hf_integrate_voxel(&v, hf_make_float4(0, 0, 1.02f, 1), depth, nullptr, nullptr, K, mu, 100.0f, 1.0f), 1);
   EXPECT_NEAR(hf_voxel_sdf(v), (1.0f - 0.5f) / 2, 1e-4f);
   EXPECT_EQ(hf_voxel_weight(v), 2.0f);
 }
@@ -345,41 +457,58 @@ TEST(Integrate, UpdateLoopMatchesPerVoxelKernelBitForBit) {
   options.noise_enabled = true;
   const datasets::SyntheticSequence seq(options);
   const VolumeParams volume = params_1cm();
-  VoxelBlockGrid fast(volume), reference(volume);
   const hf_intrinsics K = seq.camera().kernel_intrinsics();
   const float mu = float(volume.truncation_m());
-  size_t updated = 0;
-  for (int f = 0; f < seq.size(); ++f) {
-    const datasets::SyntheticFrame frame = seq.frame(f);
-    integrate(fast, frame.depth, frame.color, seq.camera(), frame.T_world_camera);
-    const SE3 T_camera_world = frame.T_world_camera.inverse();
-    const Eigen::Matrix3d R = T_camera_world.rotation();
-    const Eigen::Vector3d t = T_camera_world.translation();
-    const Eigen::Vector3f sx = (R.col(0) * volume.voxel_m).cast<float>(), sy = (R.col(1) * volume.voxel_m).cast<float>(),
-                          sz = (R.col(2) * volume.voxel_m).cast<float>();
-    for (const BlockCoord& c : blocks_touched_by(volume, frame.depth, seq.camera(), frame.T_world_camera)) {
-      VoxelBlock* block = reference.allocate(c);
-      const Eigen::Vector3d origin = Eigen::Vector3d(c.x, c.y, c.z) * volume.block_m();
-      const Eigen::Vector3f p0 = (R * (origin + Eigen::Vector3d::Constant(0.5 * volume.voxel_m)) + t).cast<float>();
-      for (int z = 0; z < 8; ++z) {
-        const Eigen::Vector3f pz = p0 + float(z) * sz;
-        for (int y = 0; y < 8; ++y) {
-          Eigen::Vector3f p = pz + float(y) * sy;
-          for (int x = 0; x < 8; ++x, p += sx)
-            updated += hf_integrate_voxel(&block->voxels[hf_voxel_index(x, y, z)],
-                                          hf_make_float4(p.x(), p.y(), p.z(), 1.0f), frame.depth.data(),
-                                          reinterpret_cast<const hf_uint8*>(frame.color.data()), K, mu,
-                                          volume.max_weight, 1.0f);
+  // Both distances: projective (no factor map) and point-to-plane (the per-pixel factor map).
+  for (const bool point_to_plane : {false, true}) {
+    SCOPED_TRACE(point_to_plane ? "point-to-plane" : "projective");
+    VoxelBlockGrid fast(volume), reference(volume);
+    IntegrateParams params;
+    params.point_to_plane = point_to_plane;
+    size_t updated = 0;
+    for (int f = 0; f < seq.size(); ++f) {
+      const datasets::SyntheticFrame frame = seq.frame(f);
+      integrate(fast, frame.depth, frame.color, seq.camera(), frame.T_world_camera, params);
+      std::vector<float> factor;
+      if (point_to_plane) {  // pixel by pixel with the shared function
+        factor.resize(frame.depth.pixels().size());
+        for (int v = 0; v < K.height; ++v)
+          for (int u = 0; u < K.width; ++u)
+            factor[size_t(v) * K.width + u] = hf_point_to_plane_factor(frame.depth.data(), u, v, K, mu);
+      }
+      const float* factor_px = factor.empty() ? nullptr : factor.data();
+      const SE3 T_camera_world = frame.T_world_camera.inverse();
+      const Eigen::Matrix3d R = T_camera_world.rotation();
+      const Eigen::Vector3d t = T_camera_world.translation();
+      const Eigen::Vector3f sx = (R.col(0) * volume.voxel_m).cast<float>(),
+                            sy = (R.col(1) * volume.voxel_m).cast<float>(),
+                            sz = (R.col(2) * volume.voxel_m).cast<float>();
+      for (const BlockCoord& c : blocks_touched_by(volume, frame.depth, seq.camera(), frame.T_world_camera)) {
+        VoxelBlock* block = reference.allocate(c);
+        const Eigen::Vector3d origin = Eigen::Vector3d(c.x, c.y, c.z) * volume.block_m();
+        const Eigen::Vector3f p0 =
+            (R * (origin + Eigen::Vector3d::Constant(0.5 * volume.voxel_m)) + t).cast<float>();
+        for (int z = 0; z < 8; ++z) {
+          const Eigen::Vector3f pz = p0 + float(z) * sz;
+          for (int y = 0; y < 8; ++y) {
+            Eigen::Vector3f p = pz + float(y) * sy;
+            for (int x = 0; x < 8; ++x, p += sx)
+              updated += hf_integrate_voxel(&block->voxels[hf_voxel_index(x, y, z)],
+                                            hf_make_float4(p.x(), p.y(), p.z(), 1.0f), frame.depth.data(), factor_px,
+                                            reinterpret_cast<const hf_uint8*>(frame.color.data()), K, mu,
+                                            volume.max_weight, 1.0f);
+          }
         }
       }
     }
+    EXPECT_GT(updated, 50000u);
+    ASSERT_EQ(fast.block_coords(), reference.block_coords());
+    size_t differing = 0;
+    for (const BlockCoord& c : fast.block_coords())
+      differing +=
+          std::memcmp(fast.find(c)->voxels.data(), reference.find(c)->voxels.data(), sizeof(VoxelBlock)) != 0;
+    EXPECT_EQ(differing, 0u);
   }
-  EXPECT_GT(updated, 50000u);
-  ASSERT_EQ(fast.block_coords(), reference.block_coords());
-  size_t differing = 0;
-  for (const BlockCoord& c : fast.block_coords())
-    differing += std::memcmp(fast.find(c)->voxels.data(), reference.find(c)->voxels.data(), sizeof(VoxelBlock)) != 0;
-  EXPECT_EQ(differing, 0u);
 }
 
 }  // namespace
