@@ -72,6 +72,28 @@ TEST(Integrate, FrontoParallelPlaneGivesAnalyticSdf) {
   EXPECT_LT(max_err, 0.5 / HF_SDF_SCALE + 2e-5) << "max error " << max_err;
 }
 
+// Calls fn(voxel, centre in the world, centre in the camera, u, w) for every observed voxel of grid whose centre
+// projects into the camera's image at nearest pixel (u, w), skipping centres within float rounding of a pixel
+// border (either pixel would be right there).
+template <class Fn>
+void for_each_observed_voxel(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_camera_world,
+                             Fn fn) {
+  for (const auto& [c, block] : grid.blocks()) {
+    for (int z = 0; z < 8; ++z)
+      for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) {
+          const Voxel& v = block->voxels[hf_voxel_index(x, y, z)];
+          if (v.weight == 0) continue;
+          const Eigen::Vector3d p_world = voxel_centre(grid.params(), c, x, y, z);
+          const Eigen::Vector3d p = T_camera_world * p_world;
+          const Eigen::Vector2d px = camera.project(p);
+          const double fu = px.x() + 0.5 - std::floor(px.x() + 0.5), fv = px.y() + 0.5 - std::floor(px.y() + 0.5);
+          if (fu < 1e-3 || fu > 1 - 1e-3 || fv < 1e-3 || fv > 1 - 1e-3) continue;
+          fn(v, p_world, p, int(std::floor(px.x() + 0.5)), int(std::floor(px.y() + 0.5)));
+        }
+  }
+}
+
 // A tilted plane seen from an offset, rotated camera, projective distances (point_to_plane off): each observed voxel
 // holds the projective TSDF
 // min(1, (d(u) - z) / mu) with u the nearest pixel of the voxel centre and d(u) the exact ray-plane depth, and
@@ -91,29 +113,17 @@ TEST(Integrate, TiltedPlaneMatchesProjectiveTsdf) {
   const SE3 T_camera_world = T_world_camera.inverse();
   const double mu = volume.truncation_m();
   size_t checked = 0;
-  for (const auto& [c, block] : grid.blocks()) {
-    for (int z = 0; z < 8; ++z)
-      for (int y = 0; y < 8; ++y)
-        for (int x = 0; x < 8; ++x) {
-          const Voxel& v = block->voxels[hf_voxel_index(x, y, z)];
-          if (v.weight == 0) continue;
-          const Eigen::Vector3d p_world = voxel_centre(volume, c, x, y, z);
-          const Eigen::Vector3d p = T_camera_world * p_world;
-          const Eigen::Vector2d px = camera.project(p);
-          const double fu = px.x() + 0.5 - std::floor(px.x() + 0.5), fv = px.y() + 0.5 - std::floor(px.y() + 0.5);
-          // Skip voxels whose projection is within float rounding of a pixel border (either pixel is right).
-          if (fu < 1e-3 || fu > 1 - 1e-3 || fv < 1e-3 || fv > 1 - 1e-3) continue;
-          const int u = int(std::floor(px.x() + 0.5)), w = int(std::floor(px.y() + 0.5));
-          const double d = depth(u, w);
-          const double expected = std::min(1.0, (d - p.z()) / mu);
-          EXPECT_NEAR(hf_voxel_sdf(v), expected, 0.5 / HF_SDF_SCALE + 5e-5);
-          const double true_sdf = n.dot(p_world) - offset;  // positive on the camera side
-          if (std::abs(true_sdf) > 0.5 * volume.voxel_m) {
-            EXPECT_EQ(hf_voxel_sdf(v) > 0, true_sdf > 0);
-          }
-          ++checked;
-        }
-  }
+  for_each_observed_voxel(grid, camera, T_camera_world, [&](const Voxel& v, const Eigen::Vector3d& p_world,
+                                                            const Eigen::Vector3d& p, int u, int w) {
+    const double d = depth(u, w);
+    const double expected = std::min(1.0, (d - p.z()) / mu);
+    EXPECT_NEAR(hf_voxel_sdf(v), expected, 0.5 / HF_SDF_SCALE + 5e-5);
+    const double true_sdf = n.dot(p_world) - offset;  // positive on the camera side
+    if (std::abs(true_sdf) > 0.5 * volume.voxel_m) {
+      EXPECT_EQ(hf_voxel_sdf(v) > 0, true_sdf > 0);
+    }
+    ++checked;
+  });
   EXPECT_GT(checked, 10000u);
 }
 
@@ -189,33 +199,22 @@ TEST(Integrate, TiltedPlaneGivesTrueDistanceWithPointToPlane) {
   const double mu = volume.truncation_m();
   size_t checked = 0, below_projective = 0;
   double max_err = 0.0, max_lateral = 0.0;
-  for (const auto& [c, block] : grid.blocks()) {
-    for (int z = 0; z < 8; ++z)
-      for (int y = 0; y < 8; ++y)
-        for (int x = 0; x < 8; ++x) {
-          const Voxel& v = block->voxels[hf_voxel_index(x, y, z)];
-          if (v.weight == 0) continue;
-          const Eigen::Vector3d p_world = voxel_centre(volume, c, x, y, z);
-          const Eigen::Vector3d p = T_camera_world * p_world;
-          const Eigen::Vector2d px = camera.project(p);
-          const double fu = px.x() + 0.5 - std::floor(px.x() + 0.5), fv = px.y() + 0.5 - std::floor(px.y() + 0.5);
-          if (fu < 1e-3 || fu > 1 - 1e-3 || fv < 1e-3 || fv > 1 - 1e-3) continue;
-          const int u = int(std::floor(px.x() + 0.5)), w = int(std::floor(px.y() + 0.5));
-          if (u < 1 || w < 1 || u >= camera.width - 1 || w >= camera.height - 1) continue;  // border: projective
-          // The point of pixel (u, w)'s ray at the voxel's depth, and its true signed distance.
-          const Eigen::Vector3d q = camera.backproject(u, w, p.z());
-          const double sdf_q = n.dot(T_world_camera * q) - offset;
-          const double expected = std::clamp(sdf_q / mu, -1.0, 1.0);
-          max_err = std::max(max_err, std::abs(hf_voxel_sdf(v) - expected));
-          const double sdf_p = n.dot(p_world) - offset;
-          // Lateral offset q - p: at most half a pixel in u and v at depth p.z, seen along the normal.
-          const double lateral_bound =
-              (std::abs(n_cam.x()) / camera.fx + std::abs(n_cam.y()) / camera.fy) * 0.5 * p.z() + 1e-6;
-          max_lateral = std::max(max_lateral, std::abs(sdf_q - sdf_p) / lateral_bound);
-          below_projective += std::abs(hf_voxel_sdf(v)) < 0.99 * std::min(1.0, std::abs(depth(u, w) - p.z()) / mu);
-          ++checked;
-        }
-  }
+  for_each_observed_voxel(grid, camera, T_camera_world, [&](const Voxel& v, const Eigen::Vector3d& p_world,
+                                                            const Eigen::Vector3d& p, int u, int w) {
+    if (u < 1 || w < 1 || u >= camera.width - 1 || w >= camera.height - 1) return;  // border: projective
+    // The point of pixel (u, w)'s ray at the voxel's depth, and its true signed distance.
+    const Eigen::Vector3d q = camera.backproject(u, w, p.z());
+    const double sdf_q = n.dot(T_world_camera * q) - offset;
+    const double expected = std::clamp(sdf_q / mu, -1.0, 1.0);
+    max_err = std::max(max_err, std::abs(hf_voxel_sdf(v) - expected));
+    const double sdf_p = n.dot(p_world) - offset;
+    // Lateral offset q - p: at most half a pixel in u and v at depth p.z, seen along the normal.
+    const double lateral_bound =
+        (std::abs(n_cam.x()) / camera.fx + std::abs(n_cam.y()) / camera.fy) * 0.5 * p.z() + 1e-6;
+    max_lateral = std::max(max_lateral, std::abs(sdf_q - sdf_p) / lateral_bound);
+    below_projective += std::abs(hf_voxel_sdf(v)) < 0.99 * std::min(1.0, std::abs(depth(u, w) - p.z()) / mu);
+    ++checked;
+  });
   EXPECT_GT(checked, 10000u);
   // Half an int16 step + the factor's ~1e-5 relative error on distances up to a few mu.
   EXPECT_LT(max_err, 0.5 / HF_SDF_SCALE + 1e-4) << "max error " << max_err;
