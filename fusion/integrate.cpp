@@ -203,29 +203,16 @@ IntegrateStats integrate(VoxelBlockGrid& grid, const DepthImage& depth, const Co
   const float max_weight = volume.max_weight;
   const float w = params.observation_weight;
   const float* depth_px = depth.data();
-  // Per-pixel point-to-plane factor (|cos theta| |(x/z, y/z, 1)|, 0 = unknown): ~3 ms at 640 x 480 on 2 cores.
-  // Neighbours more than mu apart in depth are a depth edge: beyond the band the two surfaces' voxels do not mix.
+  // Per-pixel point-to-plane factor (|cos theta| |(x/z, y/z, 1)|, 0 = unknown), from the shared kernel. Neighbours
+  // more than mu apart in depth are a depth edge: beyond the band the two surfaces' voxels do not mix.
   std::vector<float> incidence;
   if (params.point_to_plane) {
     const auto t_inc = std::chrono::steady_clock::now();
-    incidence.resize(size_t(depth.width()) * depth.height());
-    const int W = depth.width(), H = depth.height();
-    const float inv_fx = 1.0f / K.fx, inv_fy = 1.0f / K.fy;
-    parallel_for_rows(H, [&](int v) {
+    const int W = depth.width();
+    incidence.resize(size_t(W) * depth.height());
+    parallel_for_rows(depth.height(), [&](int v) {
       float* out = incidence.data() + size_t(v) * W;
-      if (v == 0 || v == H - 1 || W < 3) {
-        std::fill(out, out + W, 0.0f);
-        return;
-      }
-      // hf_point_to_plane_factor (same bits) with the border handled per row instead of per pixel.
-      const float* up = depth_px + size_t(v - 1) * W;
-      const float* mid = depth_px + size_t(v) * W;
-      const float* down = depth_px + size_t(v + 1) * W;
-      const float b = (float(v) - K.cy) * inv_fy;
-      out[0] = out[W - 1] = 0.0f;
-      for (int u = 1; u < W - 1; ++u)
-        out[u] = hf_point_to_plane_factor_at(mid[u], mid[u - 1], mid[u + 1], up[u], down[u], (float(u) - K.cx) * inv_fx,
-                                             b, inv_fx, inv_fy, mu);
+      for (int u = 0; u < W; ++u) out[u] = hf_point_to_plane_factor(depth_px, u, v, K, mu);
     });
     stats.incidence_ms = ms_since(t_inc);
   }
