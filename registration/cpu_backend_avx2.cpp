@@ -68,9 +68,11 @@ HF_AVX2_INLINE __m256 dot3(const Lanes3& a, const Lanes3& b) {
 // Gathers of 32-bit values at float offsets idx (invalid lanes must hold a safe offset, e.g. 0).
 HF_AVX2_INLINE __m256 gather(const float* base, __m256i idx) { return _mm256_i32gather_ps(base, idx, 4); }
 
-// The hf_float4 at eight pixel indices as four lanes vectors: eight 16-byte loads and a 4x4 transpose per half,
-// cheaper than four gathers.
-HF_AVX2_INLINE Lanes4 load4(const hf_float4* map, const std::int32_t* i) {
+// The hf_float4 at eight pixel indices (invalid lanes must hold a safe index, e.g. 0) as four lane vectors:
+// eight 16-byte loads and a 4x4 transpose per half, cheaper than four gathers.
+HF_AVX2_INLINE Lanes4 gather4(const hf_float4* map, __m256i pixel) {
+  alignas(32) std::int32_t i[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(i), pixel);
   const float* m = reinterpret_cast<const float*>(map);
   auto pair = [m](std::int32_t a, std::int32_t b) HF_AVX2_LAMBDA {
     return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(m + 4 * a)), _mm_load_ps(m + 4 * b), 1);
@@ -80,12 +82,6 @@ HF_AVX2_INLINE Lanes4 load4(const hf_float4* map, const std::int32_t* i) {
   const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
   return {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xEE), _mm256_shuffle_ps(t1, t3, 0x44),
           _mm256_shuffle_ps(t1, t3, 0xEE)};
-}
-
-HF_AVX2_INLINE Lanes4 gather4(const hf_float4* map, __m256i pixel) {
-  alignas(32) std::int32_t i[8];
-  _mm256_store_si256(reinterpret_cast<__m256i*>(i), pixel);
-  return load4(map, i);
 }
 
 // hf_reg_transform_point / hf_reg_rotate.
