@@ -13,6 +13,8 @@
 #include <limits>
 
 #include "core/parallel.h"
+#include "core/simd_avx2.h"
+#include "fusion/integrate_cpu.h"
 #include "fusion/kernels/integrate_kernels.h"
 
 namespace hf::fusion {
@@ -31,7 +33,6 @@ BlockCoord unpack(std::uint64_t k) {
   const std::uint64_t m = (1u << 21) - 1;
   return {int((k >> 42) & m) - kCoordBias, int((k >> 21) & m) - kCoordBias, int(k & m) - kCoordBias};
 }
-bool in_pack_range(double v) { return v > -kCoordBias + 2 && v < kCoordBias - 2; }
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -115,38 +116,79 @@ std::vector<BlockCoord> blocks_touched_by(const VolumeParams& volume, const Dept
                                           const PinholeCamera& camera, const SE3& T_world_camera,
                                           const IntegrateParams& params, size_t* pixels_used) {
   check_sizes(depth, ColorImage(), camera);
-  const double mu = volume.truncation_m();
-  const double inv_block = 1.0 / volume.block_m();
+  detail::BandFrame frame;
   const Eigen::Matrix3d R = T_world_camera.rotation();
   const Eigen::Vector3d t = T_world_camera.translation();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) frame.R[3 * i + j] = R(i, j);
+    frame.t[i] = t[i];
+  }
+  frame.inv_block = 1.0 / volume.block_m();
+  frame.mu = volume.truncation_m();
+  frame.min_depth_m = params.min_depth_m;
+  frame.max_depth_m = params.max_depth_m;
+  const int W = depth.width();
+  std::vector<double> ray_x(static_cast<size_t>(W));
+  for (int u = 0; u < W; ++u) ray_x[size_t(u)] = (u - camera.cx) / camera.fx;
+  const bool simd = cpu_has_avx2();
 
-  tbb::enumerable_thread_specific<TouchedList> lists;
+  // Per thread: the touched blocks, one row of band ends and two rows of their cells (this one and the one above).
+  struct Scratch {
+    TouchedList list;
+    std::vector<double> ends;
+    std::vector<std::int32_t> cells[2];
+    std::vector<std::uint8_t> ok[2];
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch;
   tbb::combinable<size_t> used([] { return size_t(0); });
-  tbb::parallel_for(tbb::blocked_range<int>(0, depth.height()), [&](const tbb::blocked_range<int>& rows) {
-    TouchedList& list = lists.local();
+  // Rows in fixed groups (not TBB's adaptive chunks): a pixel's traversal may be skipped for the row above's, so
+  // the groups' borders must not depend on scheduling for the result to be deterministic.
+  constexpr int kRowsPerGroup = 8;
+  const int groups = (depth.height() + kRowsPerGroup - 1) / kRowsPerGroup;
+  tbb::parallel_for(0, groups, [&](int g) {
+    Scratch& s = scratch.local();
+    s.ends.resize(6 * size_t(W));
+    detail::BandRow band;
+    for (int i = 0; i < 3; ++i) {
+      band.a[i] = s.ends.data() + size_t(i) * W;
+      band.b[i] = s.ends.data() + size_t(3 + i) * W;
+    }
+    for (int k = 0; k < 2; ++k) {
+      s.cells[k].resize(6 * size_t(W));
+      s.ok[k].assign(size_t(W), 0);  // no row above the group's first
+    }
     size_t n = 0;
-    for (int v = rows.begin(); v != rows.end(); ++v) {
-      const float* row = depth.data() + size_t(v) * depth.width();
-      // A ray whose band starts and ends in the same blocks as the previous pixel's crosses the same blocks (the
-      // two segments are almost parallel and a fraction of a block apart): skip its traversal.
-      Eigen::Vector3i last_a(INT_MIN, INT_MIN, INT_MIN), last_b(INT_MIN, INT_MIN, INT_MIN);
-      for (int u = 0; u < depth.width(); ++u) {
-        const double d = row[u];
-        if (!(d >= params.min_depth_m && d <= params.max_depth_m)) continue;  // also rejects NaN and inf
-        const Eigen::Vector3d ray((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
-        const double z0 = std::max(d - mu, 1e-3);
-        const Eigen::Vector3d a = (R * (ray * z0) + t) * inv_block;
-        const Eigen::Vector3d b = (R * (ray * (d + mu)) + t) * inv_block;
-        bool ok = true;
-        for (int i = 0; i < 3; ++i) ok = ok && in_pack_range(a[i]) && in_pack_range(b[i]);
-        if (!ok) continue;
+    const int v_end = std::min(depth.height(), (g + 1) * kRowsPerGroup);
+    for (int v = g * kRowsPerGroup; v < v_end; ++v) {
+      const int cur = v & 1;
+      const std::int32_t* above = s.cells[1 - cur].data();
+      const std::uint8_t* ok_above = s.ok[1 - cur].data();
+      for (int i = 0; i < 3; ++i) {
+        band.cell_a[i] = s.cells[cur].data() + size_t(i) * W;
+        band.cell_b[i] = s.cells[cur].data() + size_t(3 + i) * W;
+      }
+      band.ok = s.ok[cur].data();
+      const float* row = depth.data() + size_t(v) * W;
+      const double ray_y = (v - camera.cy) / camera.fy;
+      if (simd)
+        detail::band_row_avx2(row, W, ray_x.data(), ray_y, frame, band);
+      else
+        detail::band_row(row, W, ray_x.data(), ray_y, frame, band);
+      // A ray whose band starts and ends in the same blocks as its left or upper neighbour's crosses the same
+      // blocks (the two segments are almost parallel and a fraction of a block apart): skip its traversal.
+      const std::int32_t* here = s.cells[cur].data();
+      auto same_ends = [W](const std::int32_t* a, int u_a, const std::int32_t* b, int u_b) {
+        for (int i = 0; i < 6; ++i)
+          if (a[size_t(i) * W + u_a] != b[size_t(i) * W + u_b]) return false;
+        return true;
+      };
+      for (int u = 0; u < W; ++u) {
+        if (!band.ok[u]) continue;
         ++n;
-        const Eigen::Vector3i cell_a(int(std::floor(a.x())), int(std::floor(a.y())), int(std::floor(a.z())));
-        const Eigen::Vector3i cell_b(int(std::floor(b.x())), int(std::floor(b.y())), int(std::floor(b.z())));
-        if (cell_a == last_a && cell_b == last_b) continue;
-        last_a = cell_a;
-        last_b = cell_b;
-        traverse(a, b, list);
+        if (u > 0 && band.ok[u - 1] && same_ends(here, u - 1, here, u)) continue;
+        if (ok_above[u] && same_ends(above, u, here, u)) continue;
+        traverse(Eigen::Vector3d(band.a[0][u], band.a[1][u], band.a[2][u]),
+                 Eigen::Vector3d(band.b[0][u], band.b[1][u], band.b[2][u]), s.list);
       }
     }
     used.local() += n;
@@ -154,9 +196,9 @@ std::vector<BlockCoord> blocks_touched_by(const VolumeParams& volume, const Dept
 
   std::vector<std::uint64_t> keys;
   size_t total = 0;
-  for (const auto& list : lists) total += list.keys.size();
+  for (const auto& s : scratch) total += s.list.keys.size();
   keys.reserve(total);
-  for (const auto& list : lists) keys.insert(keys.end(), list.keys.begin(), list.keys.end());
+  for (const auto& s : scratch) keys.insert(keys.end(), s.list.keys.begin(), s.list.keys.end());
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   std::vector<BlockCoord> coords(keys.size());
@@ -195,13 +237,15 @@ IntegrateStats integrate(VoxelBlockGrid& grid, const DepthImage& depth, const Co
   const Eigen::Matrix3d R_cw = T_camera_world.rotation();
   const Eigen::Vector3d t_cw = T_camera_world.translation();
   const double voxel_m = volume.voxel_m;
-  const Eigen::Vector3f step_x = (R_cw.col(0) * voxel_m).cast<float>();
-  const Eigen::Vector3f step_y = (R_cw.col(1) * voxel_m).cast<float>();
-  const Eigen::Vector3f step_z = (R_cw.col(2) * voxel_m).cast<float>();
+  // The camera-frame images of one voxel step along the world axes, shared by all blocks.
+  detail::BlockFrame steps{};
+  for (int a = 0; a < 3; ++a) {
+    steps.s_x[a] = float(R_cw(a, 0) * voxel_m);
+    steps.s_y[a] = float(R_cw(a, 1) * voxel_m);
+    steps.s_z[a] = float(R_cw(a, 2) * voxel_m);
+  }
   const hf_intrinsics K = camera.kernel_intrinsics();
   const float mu = float(volume.truncation_m());
-  const float max_weight = volume.max_weight;
-  const float w = params.observation_weight;
   const float* depth_px = depth.data();
   // Per-pixel point-to-plane factor (|cos theta| |(x/z, y/z, 1)|, 0 = unknown), from the shared kernel. Neighbours
   // more than mu apart in depth are a depth edge: beyond the band the two surfaces' voxels do not mix.
@@ -216,8 +260,16 @@ IntegrateStats integrate(VoxelBlockGrid& grid, const DepthImage& depth, const Co
     });
     stats.incidence_ms = ms_since(t_inc);
   }
-  const float* incidence_px = incidence.empty() ? nullptr : incidence.data();
-  const hf_uint8* rgb = colour.empty() ? nullptr : reinterpret_cast<const hf_uint8*>(colour.data());
+
+  detail::FrameInputs frame;
+  frame.depth = depth_px;
+  frame.incidence = incidence.empty() ? nullptr : incidence.data();
+  frame.rgb = colour.empty() ? nullptr : reinterpret_cast<const hf_uint8*>(colour.data());
+  frame.K = K;
+  frame.mu = mu;
+  frame.max_weight = volume.max_weight;
+  frame.w = params.observation_weight;
+  const bool simd = cpu_has_avx2() && size_t(depth.width()) * size_t(depth.height()) >= 2;
 
   tbb::combinable<size_t> updated([] { return size_t(0); });
   tbb::combinable<size_t> in_view([] { return size_t(0); });
@@ -225,31 +277,15 @@ IntegrateStats integrate(VoxelBlockGrid& grid, const DepthImage& depth, const Co
     size_t n_updated = 0, n_view = 0;
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const BlockCoord& c = visible[i].first;
-      Voxel* voxels = visible[i].second->voxels.data();
       const Eigen::Vector3d origin_world = Eigen::Vector3d(c.x, c.y, c.z) * volume.block_m();
       if (!block_in_view(R_cw, t_cw, origin_world, volume.block_m(), camera)) continue;
       ++n_view;
-      // Centre of voxel (0, 0, 0) in the camera frame; the others follow by adding the voxel steps.
+      detail::BlockFrame b = steps;
       const Eigen::Vector3f p0 =
           (R_cw * (origin_world + Eigen::Vector3d::Constant(0.5 * voxel_m)) + t_cw).cast<float>();
-      for (int z = 0; z < HF_BLOCK_SIZE; ++z) {
-        const Eigen::Vector3f pz = p0 + float(z) * step_z;
-        for (int y = 0; y < HF_BLOCK_SIZE; ++y) {
-          // The shared kernel in two passes over the row: the projections (branch-free, vectorised), then the
-          // updates of the voxels that land in the image. Same arithmetic as hf_integrate_voxel.
-          float px[HF_BLOCK_SIZE], py[HF_BLOCK_SIZE], pz_cam[HF_BLOCK_SIZE];
-          int pixel[HF_BLOCK_SIZE];
-          Eigen::Vector3f p = pz + float(y) * step_y;
-          for (int x = 0; x < HF_BLOCK_SIZE; ++x, p += step_x) px[x] = p.x(), py[x] = p.y(), pz_cam[x] = p.z();
-          for (int x = 0; x < HF_BLOCK_SIZE; ++x) pixel[x] = hf_voxel_pixel(px[x], py[x], pz_cam[x], K);
-          Voxel* row = voxels + hf_voxel_index(0, y, z);
-          for (int x = 0; x < HF_BLOCK_SIZE; ++x) {
-            if (pixel[x] >= 0)
-              n_updated += hf_integrate_voxel_at(row + x, pz_cam[x], pixel[x], depth_px, incidence_px, rgb, mu,
-                                                 max_weight, w);
-          }
-        }
-      }
+      for (int a = 0; a < 3; ++a) b.p0[a] = p0[a];
+      Voxel* voxels = visible[i].second->voxels.data();
+      n_updated += size_t(simd ? detail::update_block_avx2(voxels, b, frame) : detail::update_block(voxels, b, frame));
     }
     updated.local() += n_updated;
     in_view.local() += n_view;

@@ -5,10 +5,15 @@
 //      depth band [d - mu, d + mu] with a 3-D DDA over blocks and allocates each block it crosses. Free space in
 //      front of the band is never allocated; NaN, inf, zero and out-of-range depth allocate nothing. Blocks the
 //      frame touches that were streamed out (in `store`) are brought back first, so a block lives in one place.
+//      A pixel whose band starts and ends in the same two blocks as its left or upper neighbour's is not walked
+//      again (the segments are nearly parallel and a fraction of a block apart). On the room at 1 cm, 640x480,
+//      54 k of the 304 k valid pixels per frame are walked (87 k when only the left neighbour counts), and the map
+//      misses 0.1 % of the blocks the full walk allocates (blocks a single segment clips at a corner).
 //   2. Update. The blocks touched in phase 1 (the visible set) are updated in parallel over blocks (TBB); each
 //      block runs the shared per-voxel kernel (fusion/kernels/integrate_kernels.h: projective TSDF, running
-//      average of eq. 57-58, weight cap, colour with the same weights) with the voxel centre moved incrementally
-//      through the block. Blocks whose corners all project outside the image or behind the camera are skipped.
+//      average of eq. 57-58, weight cap, colour with the same weights), eight voxels of a block row at a time
+//      with AVX2 where the processor has it (fusion/integrate_cpu.h; same bits as the voxel-by-voxel loop).
+//      Blocks whose corners all project outside the image or behind the camera are skipped.
 //      With IntegrateParams::point_to_plane, a per-pixel pass first computes each pixel's point-to-plane factor
 //      from the depth image (hf_point_to_plane_factor) and the kernel scales the projective distance by it.
 //

@@ -12,7 +12,7 @@
 namespace hf {
 
 CpuReductionBackend::CpuReductionBackend(int rows_per_chunk, bool vectorised)
-    : rows_per_chunk_(std::max(1, rows_per_chunk)), vectorised_(vectorised && detail::cpu_has_avx2()) {}
+    : rows_per_chunk_(std::max(1, rows_per_chunk)), vectorised_(vectorised && cpu_has_avx2()) {}
 
 NormalEquations CpuReductionBackend::reduce(const ResidualProblem& problem) {
   validate_problem(problem);

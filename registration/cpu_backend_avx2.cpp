@@ -8,30 +8,19 @@
 // lane's row is the scalar row exactly.
 #include "registration/cpu_backend_avx2.h"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define HF_HAVE_AVX2_PATH 1
-#include <immintrin.h>
-#endif
-
 #include <cstdint>
 
 #include "core/error.h"
+#include "core/simd_avx2.h"
 #include "registration/kernels/reg_common.h"
 
 namespace hf::detail {
 
 #ifdef HF_HAVE_AVX2_PATH
 
-bool cpu_has_avx2() {
-  static const bool has = __builtin_cpu_supports("avx2");
-  return has;
-}
-
 namespace {
 
-#define HF_AVX2 __attribute__((target("avx2,fma")))
-#define HF_AVX2_INLINE __attribute__((target("avx2,fma"), always_inline)) inline
-#define HF_AVX2_LAMBDA __attribute__((target("avx2,fma"), always_inline))
+using namespace hf::avx2;
 
 struct Lanes3 {
   __m256 x, y, z;
@@ -48,25 +37,10 @@ struct Rows8 {
   __m256 valid;  // all-ones where the lane has a row
 };
 
-HF_AVX2_INLINE __m256 splat(float v) { return _mm256_set1_ps(v); }
-HF_AVX2_INLINE __m256 mul(__m256 a, __m256 b) { return _mm256_mul_ps(a, b); }
-HF_AVX2_INLINE __m256 add(__m256 a, __m256 b) { return _mm256_add_ps(a, b); }
-HF_AVX2_INLINE __m256 sub(__m256 a, __m256 b) { return _mm256_sub_ps(a, b); }
-HF_AVX2_INLINE __m256 and_(__m256 a, __m256 b) { return _mm256_and_ps(a, b); }
-HF_AVX2_INLINE __m256 cmp_gt(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
-HF_AVX2_INLINE __m256 cmp_ge(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_GE_OQ); }
-HF_AVX2_INLINE __m256 cmp_le(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_LE_OQ); }
-HF_AVX2_INLINE __m256 cmp_lt(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_LT_OQ); }
-// a != b, true for NaN like C's !=.
-HF_AVX2_INLINE __m256 cmp_ne(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_NEQ_UQ); }
-HF_AVX2_INLINE bool none(__m256 mask) { return _mm256_movemask_ps(mask) == 0; }
 // Expressions written as in the scalar kernels: a.x * b.x + a.y * b.y + a.z * b.z, left to right.
 HF_AVX2_INLINE __m256 dot3(const Lanes3& a, const Lanes3& b) {
   return add(add(mul(a.x, b.x), mul(a.y, b.y)), mul(a.z, b.z));
 }
-
-// Gathers of 32-bit values at float offsets idx (invalid lanes must hold a safe offset, e.g. 0).
-HF_AVX2_INLINE __m256 gather(const float* base, __m256i idx) { return _mm256_i32gather_ps(base, idx, 4); }
 
 // The hf_float4 at eight pixel indices (invalid lanes must hold a safe index, e.g. 0) as four lane vectors:
 // eight 16-byte loads and a 4x4 transpose per half, cheaper than four gathers.
@@ -334,8 +308,6 @@ HF_AVX2 void accumulate_rows_avx2(const ResidualProblem& p, int y_begin, int y_e
 }
 
 #else
-
-bool cpu_has_avx2() { return false; }
 
 void accumulate_rows_avx2(const ResidualProblem&, int, int, double*) {
   throw Error("accumulate_rows_avx2: this build has no AVX2 path");

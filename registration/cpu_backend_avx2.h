@@ -6,17 +6,15 @@
 // the two paths to each other. The scalar kernel stays the specification: change it first, then this file.
 #pragma once
 
+#include "core/simd_avx2.h"
 #include "registration/reduction.h"
 
 namespace hf::detail {
 
-// Whether this processor can run accumulate_rows_avx2 (checked once).
-bool cpu_has_avx2();
-
 // Adds the rows of current-frame pixel rows [y_begin, y_end) of `problem` to sums (HF_REG_SUMS doubles, the
 // order of registration/kernels/reg_common.h): the geometric rows of every pixel, then the photometric rows of
 // the pixels on the photometric_step grid, exactly the rows hf_reg_pixel() writes. Only call it when
-// cpu_has_avx2().
+// hf::cpu_has_avx2().
 void accumulate_rows_avx2(const ResidualProblem& problem, int y_begin, int y_end, double* sums);
 
 }  // namespace hf::detail

@@ -490,12 +490,14 @@ TEST(Integrate, UpdateLoopMatchesPerVoxelKernelBitForBit) {
         for (int z = 0; z < 8; ++z) {
           const Eigen::Vector3f pz = p0 + float(z) * sz;
           for (int y = 0; y < 8; ++y) {
-            Eigen::Vector3f p = pz + float(y) * sy;
-            for (int x = 0; x < 8; ++x, p += sx)
+            const Eigen::Vector3f row = pz + float(y) * sy;
+            for (int x = 0; x < 8; ++x) {
+              const Eigen::Vector3f p = row + float(x) * sx;
               updated += hf_integrate_voxel(&block->voxels[hf_voxel_index(x, y, z)],
                                             hf_make_float4(p.x(), p.y(), p.z(), 1.0f), frame.depth.data(), factor_px,
                                             reinterpret_cast<const hf_uint8*>(frame.color.data()), K, mu,
                                             volume.max_weight, 1.0f);
+            }
           }
         }
       }
