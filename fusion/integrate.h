@@ -8,7 +8,7 @@
 //      A pixel whose band starts and ends in the same two blocks as its left or upper neighbour's is not walked
 //      again (the segments are nearly parallel and a fraction of a block apart). On the room at 1 cm, 640x480,
 //      54 k of the 304 k valid pixels per frame are walked (87 k when only the left neighbour counts), and the map
-//      misses 0.1 % of the blocks the full walk allocates (blocks a single segment clips at a corner).
+//      has 0.1 % fewer blocks than with the left-neighbour test alone (blocks one segment clips at a corner).
 //   2. Update. The blocks touched in phase 1 (the visible set) are updated in parallel over blocks (TBB); each
 //      block runs the shared per-voxel kernel (fusion/kernels/integrate_kernels.h: projective TSDF, running
 //      average of eq. 57-58, weight cap, colour with the same weights), eight voxels of a block row at a time
