@@ -4,10 +4,12 @@
 
 #include <cfloat>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 
 #include "core/error.h"
+#include "core/kernels/image_kernels.h"
 #include "core/normals.h"
 #include "tests/core/synthetic.h"
 
@@ -226,6 +228,35 @@ TEST(DepthPyramid, InvalidNeighboursIgnoredAndOutlierRejected) {
       ASSERT_EQ(half(x, y), any ? 2.0f : 0.0f) << x << "," << y;
     }
   EXPECT_EQ(half(10, 10), 0.0f);
+}
+
+// pyr_down_depth runs interior pixels eight at a time with AVX2 where the processor has it: every output must
+// still be the per-pixel kernel's, bit for bit, on images of every width remainder with holes, outliers, depth
+// steps at the 3 sigma_r limit and blocks with 0-4 valid samples.
+TEST(DepthPyramid, EveryPixelIsTheKernels) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  for (int trial = 0; trial < 40; ++trial) {
+    const int w = 2 + int(rng() % 90), h = 2 + int(rng() % 30);
+    DepthImage d(w, h);
+    const float hole_rate = 0.5f * u(rng);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const float surface = (x + y) % 17 < 8 ? 1.0f : 1.0f + 0.2f * u(rng);  // steps near and beyond 9 cm
+        const float holes[] = {0.0f, nan, inf, -0.5f};
+        d(x, y) = u(rng) < hole_rate ? holes[rng() % 4] : surface + 0.01f * u(rng);
+      }
+    const float sigma_r = 0.01f + 0.04f * u(rng);
+    const DepthImage half = pyr_down_depth(d, sigma_r);
+    for (int y = 0; y < half.height(); ++y)
+      for (int x = 0; x < half.width(); ++x) {
+        const float expected = hf_pyrdown_depth_pixel(d.data(), w, h, x, y, 3.0f * sigma_r);
+        ASSERT_EQ(std::memcmp(&half(x, y), &expected, sizeof(float)), 0)
+            << "trial " << trial << " (" << w << "x" << h << ") pixel " << x << "," << y << ": " << half(x, y)
+            << " vs " << expected;
+      }
+  }
 }
 
 TEST(DepthPyramid, AllInvalidInputsGiveAllInvalidLevels) {
