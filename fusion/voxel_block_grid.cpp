@@ -157,6 +157,14 @@ std::vector<std::pair<BlockCoord, const VoxelBlock*>> VoxelBlockGrid::blocks() c
   return {mutable_blocks.begin(), mutable_blocks.end()};
 }
 
+std::vector<std::pair<BlockCoord, const VoxelBlock*>> VoxelBlockGrid::blocks_unordered() const {
+  std::vector<std::pair<BlockCoord, const VoxelBlock*>> out;
+  std::shared_lock lock(impl_->mutex);
+  out.reserve(impl_->table.size());
+  for (const auto& [c, slot] : impl_->table) out.emplace_back(c, impl_->slot_block(slot));
+  return out;
+}
+
 void VoxelBlockGrid::for_each_block(const std::function<void(const BlockCoord&, const VoxelBlock&)>& f) const {
   for (const auto& [c, b] : blocks()) f(c, *b);
 }

@@ -106,6 +106,9 @@ class VoxelBlockGrid {
   // (coord, block) of every allocated block in block_coords() order: for parallel loops over blocks.
   std::vector<std::pair<BlockCoord, VoxelBlock*>> blocks();
   std::vector<std::pair<BlockCoord, const VoxelBlock*>> blocks() const;
+  // The same in the hash table's order, without the sort (a 20 k-block map spent ~2 % of the SLAM pipeline's time
+  // sorting for each raycast): only for passes whose result does not depend on the order (look-up tables, bounds).
+  std::vector<std::pair<BlockCoord, const VoxelBlock*>> blocks_unordered() const;
 
   // World point -> block containing it; world point -> continuous voxel coordinates (voxel centres at integers).
   BlockCoord block_of(const Eigen::Vector3d& p_world) const;

@@ -7,6 +7,8 @@
 #include <random>
 #include <set>
 #include <thread>
+#include <tuple>
+#include <utility>
 
 #include "fusion/gc.h"
 
@@ -184,6 +186,17 @@ TEST(VoxelBlockGrid, IterationIsSortedAndComplete) {
   std::vector<BlockCoord> visited;
   grid.for_each_block([&](const BlockCoord& c, const VoxelBlock&) { visited.push_back(c); });
   EXPECT_EQ(visited, coords);
+  // The unordered snapshot holds the same (coordinate, block) pairs.
+  auto unordered = grid.blocks_unordered();
+  std::sort(unordered.begin(), unordered.end(), [](const auto& a, const auto& b) {
+    return std::tie(a.first.z, a.first.y, a.first.x) < std::tie(b.first.z, b.first.y, b.first.x);
+  });
+  const auto sorted = std::as_const(grid).blocks();
+  ASSERT_EQ(unordered.size(), sorted.size());
+  for (size_t i = 0; i < sorted.size(); ++i) {
+    EXPECT_EQ(unordered[i].first, sorted[i].first);
+    EXPECT_EQ(unordered[i].second, sorted[i].second);
+  }
 }
 
 TEST(GarbageCollect, ReleasesUnobservedAndFreeSpaceBlocksOnly) {
