@@ -1,6 +1,6 @@
-// The depth level has an AVX2 spelling of hf_pyrdown_depth_pixel for eight interior output pixels at a time
-// (same operations in the same order, no FMA: this file is compiled with -ffp-contract=off, so the same bits;
-// tests/core/test_pyramid.cpp holds the image to the per-pixel kernel). Why: the kernel's branches (validity,
+// Both levels have an AVX2 spelling of their per-pixel kernel for eight interior output pixels at a time (same
+// operations in the same order, no FMA: this file is compiled with -ffp-contract=off, so the same bits;
+// tests/core/test_pyramid.cpp holds each image to its kernel). Why: the depth kernel's branches (validity,
 // 3 sigma_r test, the insertion sort) cost ~170 ns per output pixel, 9.8 % of the SLAM pipeline's time on
 // fr1/rpy; eight pixels share one pass over the 6 x 6 taps as lane masks.
 #include "core/pyramid.h"
@@ -28,18 +28,6 @@ void check_levels(int levels, const char* what) {
   if (levels < 1) throw Error(std::string(what) + ": expected levels >= 1, got " + std::to_string(levels));
 }
 
-template <class PixelFn>
-Image<float> halve(const Image<float>& src, PixelFn pixel) {
-  Image<float> dst(src.width() / 2, src.height() / 2);
-  const float* s = src.data();
-  float* d = dst.data();
-  const int w = dst.width();
-  parallel_for_rows(dst.height(), [&](int y) {
-    for (int x = 0; x < w; ++x) d[size_t(y) * w + x] = pixel(s, x, y);
-  });
-  return dst;
-}
-
 #ifdef HF_HAVE_AVX2_PATH
 
 using namespace hf::avx2;
@@ -49,6 +37,18 @@ HF_AVX2_INLINE __m256 even16(const float* p) {
   const __m256 a = _mm256_loadu_ps(p), b = _mm256_loadu_ps(p + 8);
   const __m256 e = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));  // (0 2 8 10 | 4 6 12 14)
   return _mm256_castpd_ps(_mm256_permute4x64_pd(_mm256_castps_pd(e), _MM_SHUFFLE(3, 1, 2, 0)));
+}
+
+// hf_pyrdown_gaussian_pixel for output pixels x0 .. x0 + 7 of row y (the same conditions as pyr_down_depth_8).
+HF_AVX2 void pyr_down_gaussian_8(const float* src, int sw, int x0, int y, float* out) {
+  __m256 sum = _mm256_setzero_ps();
+  for (int j = 0; j < 6; ++j) {
+    const float* row = src + size_t(2 * y - 2 + j) * sw + 2 * x0 - 2;
+    __m256 r = _mm256_setzero_ps();
+    for (int i = 0; i < 6; ++i) r = add(r, mul(splat(hf_pyramid_tap_weight(i)), even16(row + i)));
+    sum = add(sum, mul(splat(hf_pyramid_tap_weight(j)), r));
+  }
+  _mm256_storeu_ps(out, sum);
 }
 
 HF_AVX2_INLINE void sort2(__m256& a, __m256& b) {
@@ -103,12 +103,43 @@ HF_AVX2 void pyr_down_depth_8(const float* src, int sw, int x0, int y, float max
 
 #endif
 
+// The half-size image of src: pixel(s, x, y) is one output pixel of a 6 x 6-window kernel; where the processor
+// has AVX2, pixel8(s, x0, y, out) writes the eight pixels x0 .. x0 + 7 of rows whose windows lie inside the
+// image, for x0 >= 1 and 2 x0 + 18 < width (its 16-float loads read one float beyond the last tap).
+template <class PixelFn, class Pixel8Fn>
+Image<float> halve(const Image<float>& src, PixelFn pixel, [[maybe_unused]] Pixel8Fn pixel8) {
+  Image<float> dst(src.width() / 2, src.height() / 2);
+  const int sw = src.width(), sh = src.height(), w = dst.width();
+  const float* s = src.data();
+  [[maybe_unused]] const bool simd = cpu_has_avx2();
+  parallel_for_rows(dst.height(), [&](int y) {
+    float* out = dst.data() + size_t(y) * w;
+    int x = 0;
+#ifdef HF_HAVE_AVX2_PATH
+    if (simd && 2 * y - 2 >= 0 && 2 * y + 3 < sh) {
+      for (; x < 1; ++x) out[x] = pixel(s, x, y);
+      for (; 2 * x + 18 < sw; x += 8) pixel8(s, x, y, out + x);
+    }
+#endif
+    for (; x < w; ++x) out[x] = pixel(s, x, y);
+  });
+  return dst;
+}
+
 }  // namespace
 
 Image<float> pyr_down_gaussian(const Image<float>& src) {
   check_halvable(src, "pyr_down_gaussian");
   const int sw = src.width(), sh = src.height();
-  return halve(src, [sw, sh](const float* s, int x, int y) { return hf_pyrdown_gaussian_pixel(s, sw, sh, x, y); });
+  return halve(
+      src, [sw, sh](const float* s, int x, int y) { return hf_pyrdown_gaussian_pixel(s, sw, sh, x, y); },
+      [sw](const float* s, int x0, int y, float* out) {
+#ifdef HF_HAVE_AVX2_PATH
+        pyr_down_gaussian_8(s, sw, x0, y, out);
+#else
+        (void)s, (void)x0, (void)y, (void)out, (void)sw;
+#endif
+      });
 }
 
 std::vector<Image<float>> build_gaussian_pyramid(const Image<float>& level0, int levels) {
@@ -126,25 +157,17 @@ DepthImage pyr_down_depth(const DepthImage& src, float sigma_r_m) {
   }
   const int sw = src.width(), sh = src.height();
   const float max_diff_m = 3.0f * sigma_r_m;
-  DepthImage dst(sw / 2, sh / 2);
-  const float* s = src.data();
-  const int w = dst.width();
-  const bool simd = cpu_has_avx2();
-  parallel_for_rows(dst.height(), [&](int y) {
-    float* out = dst.data() + size_t(y) * w;
-    int x = 0;
+  return halve(
+      src, [sw, sh, max_diff_m](const float* s, int x, int y) {
+        return hf_pyrdown_depth_pixel(s, sw, sh, x, y, max_diff_m);
+      },
+      [sw, max_diff_m](const float* s, int x0, int y, float* out) {
 #ifdef HF_HAVE_AVX2_PATH
-    // Eight at a time where every tap (and the loads' one extra float) is inside: x0 >= 1, 2 x0 + 18 < sw.
-    if (simd && 2 * y - 2 >= 0 && 2 * y + 3 < sh) {
-      for (; x < 1; ++x) out[x] = hf_pyrdown_depth_pixel(s, sw, sh, x, y, max_diff_m);
-      for (; 2 * x + 18 < sw; x += 8) pyr_down_depth_8(s, sw, x, y, max_diff_m, out + x);
-    }
+        pyr_down_depth_8(s, sw, x0, y, max_diff_m, out);
 #else
-    (void)simd;
+        (void)s, (void)x0, (void)y, (void)out, (void)sw, (void)max_diff_m;
 #endif
-    for (; x < w; ++x) out[x] = hf_pyrdown_depth_pixel(s, sw, sh, x, y, max_diff_m);
-  });
-  return dst;
+      });
 }
 
 std::vector<DepthImage> build_depth_pyramid(const DepthImage& level0, int levels, float sigma_r_m) {
