@@ -54,13 +54,15 @@ struct TouchedList {
 };
 
 // Amanatides-Woo traversal of the unit grid (block units) from a to b, both inside the packable range.
-void traverse(const Eigen::Vector3d& a, const Eigen::Vector3d& b, TouchedList& out) {
+// cell_a / cell_b are floor(a) / floor(b), already known to the caller.
+void traverse(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3i& cell_a,
+              const Eigen::Vector3i& cell_b, TouchedList& out) {
   int cell[3], end[3], step[3];
   double t_max[3], t_delta[3];
   const Eigen::Vector3d dir = b - a;
   for (int i = 0; i < 3; ++i) {
-    cell[i] = int(std::floor(a[i]));
-    end[i] = int(std::floor(b[i]));
+    cell[i] = cell_a[i];
+    end[i] = cell_b[i];
     step[i] = dir[i] > 0 ? 1 : (dir[i] < 0 ? -1 : 0);
     if (step[i] == 0) {
       t_max[i] = t_delta[i] = std::numeric_limits<double>::infinity();
@@ -188,7 +190,9 @@ std::vector<BlockCoord> blocks_touched_by(const VolumeParams& volume, const Dept
         if (u > 0 && band.ok[u - 1] && same_ends(here, u - 1, here, u)) continue;
         if (ok_above[u] && same_ends(above, u, here, u)) continue;
         traverse(Eigen::Vector3d(band.a[0][u], band.a[1][u], band.a[2][u]),
-                 Eigen::Vector3d(band.b[0][u], band.b[1][u], band.b[2][u]), s.list);
+                 Eigen::Vector3d(band.b[0][u], band.b[1][u], band.b[2][u]),
+                 Eigen::Vector3i(band.cell_a[0][u], band.cell_a[1][u], band.cell_a[2][u]),
+                 Eigen::Vector3i(band.cell_b[0][u], band.cell_b[1][u], band.cell_b[2][u]), s.list);
       }
     }
     used.local() += n;
