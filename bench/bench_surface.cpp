@@ -1,6 +1,7 @@
 // Raycast and marching-cubes meshing on the room preset (issue 3): a 640x480 raycast at 1 cm and 5 mm voxels
 // after fusing 20 noisy frames, the SLAM pipeline's raycast at the pose just integrated with and without
-// RaycastOptions::depth_hint (640x480 and 320x240), and meshing the whole map. Results in bench/results/fusion.md.
+// RaycastOptions::depth_hint (640x480 and 320x240; with the hint also with the pipeline's other tracking options),
+// and meshing the whole map. Results in bench/results/fusion.md.
 // cpu_ms_all_threads is the CPU time of all threads per iteration: with other jobs on the 2 cores it depends on
 // the load far less than the wall time does.
 //   build/release/bench/bench_surface
@@ -75,7 +76,8 @@ BENCHMARK(BM_Raycast)->Args({10, 0})->Args({10, 1})->Args({5, 0})->Unit(benchmar
 
 // The SLAM pipeline's case: raycast at the pose of the frame just integrated (frame 76, the last one fused), with
 // that frame's depth as RaycastOptions::depth_hint (range(2) = 1) or without (0), no shading. range(1) is the
-// camera scale: 0 = 640x480, 1 = 320x240.
+// camera scale: 0 = 640x480, 1 = 320x240. range(3) = 1 takes the rest of the SLAM pipeline's tracking options
+// (slam/pipeline.h: no colour, crossing refined to 0.05 voxel); 0 keeps RaycastOptions' defaults.
 void BM_RaycastAtIntegratedPose(benchmark::State& state) {
   const double voxel_m = state.range(0) / 1000.0;
   Scene& s = room(voxel_m, int(state.range(1)));
@@ -84,6 +86,10 @@ void BM_RaycastAtIntegratedPose(benchmark::State& state) {
   RaycastOptions opts;
   opts.shade = false;
   if (state.range(2) != 0) opts.depth_hint = &f.depth;
+  if (state.range(3) != 0) {
+    opts.color = false;
+    opts.refine_tol_vox = 0.05;
+  }
   const double cpu0 = process_cpu_s();
   for (auto _ : state) {
     raycast(*s.grid, s.seq->camera(), f.T_world_camera, opts, &out);
@@ -94,11 +100,13 @@ void BM_RaycastAtIntegratedPose(benchmark::State& state) {
   state.counters["blocks"] = double(s.grid->block_count());
 }
 BENCHMARK(BM_RaycastAtIntegratedPose)
-    ->ArgNames({"voxel_mm", "scale", "hint"})
-    ->Args({10, 0, 0})
-    ->Args({10, 0, 1})
-    ->Args({10, 1, 0})
-    ->Args({10, 1, 1})
+    ->ArgNames({"voxel_mm", "scale", "hint", "slam"})
+    ->Args({10, 0, 0, 0})
+    ->Args({10, 0, 1, 0})
+    ->Args({10, 0, 1, 1})
+    ->Args({10, 1, 0, 0})
+    ->Args({10, 1, 1, 0})
+    ->Args({10, 1, 1, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

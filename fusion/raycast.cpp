@@ -3,9 +3,16 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <tuple>
+#include <type_traits>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -67,28 +74,50 @@ VolumeSampler::VolumeSampler(const BlockLookup& lookup, float min_weight)
     : lookup_(&lookup),
       min_weight_raw_(std::max<std::uint16_t>(1, hf_quantise_weight(std::max(0.0f, min_weight)))) {}
 
-bool VolumeSampler::corners(const Eigen::Vector3f& p_vox, const Voxel* v[8], float f[3]) {
-  const float bx = std::floor(p_vox.x()), by = std::floor(p_vox.y()), bz = std::floor(p_vox.z());
-  // Far outside the int range nothing is allocated; refuse before the conversion would overflow.
-  constexpr float kLimit = 1.0e9f;
-  if (!(std::fabs(bx) < kLimit && std::fabs(by) < kLimit && std::fabs(bz) < kLimit)) return false;
-  const int i = int(bx), j = int(by), k = int(bz);
-  f[0] = p_vox.x() - bx, f[1] = p_vox.y() - by, f[2] = p_vox.z() - bz;
-  if ((i & 7) != 7 && (j & 7) != 7 && (k & 7) != 7) {
-    // All eight in one block: one lookup.
-    const Voxel* base = voxel(i, j, k);
-    if (base == nullptr) return false;
-    v[0] = base, v[1] = base + 1, v[2] = base + 8, v[3] = base + 9;
-    v[4] = base + 64, v[5] = base + 65, v[6] = base + 72, v[7] = base + 73;
-  } else {
-    for (int c = 0; c < 8; ++c) v[c] = voxel(i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2));
-  }
-  for (int c = 0; c < 8; ++c)
-    if (!observed(v[c])) return false;
+namespace {
+
+// What a missing block reads as: every voxel unobserved (weight 0 is below any min_weight_raw_, which is >= 1).
+const VoxelBlock kEmptyBlock{};
+
+// floor() of three coordinates as ints, and what remains (x - floor(x), exact), for |x| < limit (false beyond, or
+// for NaN; limit <= 2^31). The build targets baseline x86-64, where std::floor is a dozen instructions per value
+// without SSE4.1's roundss: truncate and step down where that rounded up (negative non-integers) instead, all three
+// axes at once with SSE2. Exact: float(int(x)) is representable for |x| < 2^31, so the result is floor(x) bit for
+// bit.
+inline bool floor3(float x, float y, float z, float limit, int out[3], float frac[3]) {
+#if defined(__SSE2__)
+  const __m128 v = _mm_setr_ps(x, y, z, 0.0f);
+  const __m128 abs_v = _mm_andnot_ps(_mm_set1_ps(-0.0f), v);
+  if (_mm_movemask_ps(_mm_cmplt_ps(abs_v, _mm_set1_ps(limit))) != 0xF) return false;
+  const __m128i t = _mm_cvttps_epi32(v);
+  const __m128i f = _mm_add_epi32(t, _mm_castps_si128(_mm_cmpgt_ps(_mm_cvtepi32_ps(t), v)));  // -1 where t > v
+  alignas(16) int fi[4];
+  alignas(16) float fr[4];
+  _mm_store_si128(reinterpret_cast<__m128i*>(fi), f);
+  _mm_store_ps(fr, _mm_sub_ps(v, _mm_cvtepi32_ps(f)));
+  out[0] = fi[0], out[1] = fi[1], out[2] = fi[2];
+  frac[0] = fr[0], frac[1] = fr[1], frac[2] = fr[2];
   return true;
+#else
+  const float v[3] = {x, y, z};
+  for (int a = 0; a < 3; ++a) {
+    if (!(std::fabs(v[a]) < limit)) return false;
+    const int t = int(v[a]);
+    out[a] = t - int(float(t) > v[a]);
+    frac[a] = v[a] - float(out[a]);
+  }
+  return true;
+#endif
 }
 
-namespace {
+// The cell of p_vox: (i, j, k) = floor(p_vox) and the fractional offset; false far outside the int range, where
+// nothing is allocated (refused before the conversion would overflow).
+inline bool cell_of(const Eigen::Vector3f& p_vox, int* i, int* j, int* k, float f[3]) {
+  int c[3];
+  if (!floor3(p_vox.x(), p_vox.y(), p_vox.z(), 1.0e9f, c, f)) return false;
+  *i = c[0], *j = c[1], *k = c[2];
+  return true;
+}
 
 // Trilinear interpolation is linear in the corner values: interpolating the raw int16 values and scaling once
 // equals hf_voxel_sdf per corner up to float rounding, without eight divisions.
@@ -100,18 +129,131 @@ float raw_trilinear(const Voxel* const v[8], const float f[3]) {
 
 }  // namespace
 
-bool VolumeSampler::sdf(const Eigen::Vector3f& p_vox, float* out) {
+const VoxelBlock* VolumeSampler::block_or_empty(int bx, int by, int bz) {
+  const VoxelBlock* b = block(bx, by, bz);
+  return b != nullptr ? b : &kEmptyBlock;
+}
+
+void VolumeSampler::gather_cell(int i, int j, int k, const Voxel* v[8]) {
+  const int lx = i & 7, ly = j & 7, lz = k & 7;
+  const int bx = i >> 3, by = j >> 3, bz = k >> 3;
+  const VoxelBlock* b0 = block_or_empty(bx, by, bz);
+  if (lx != 7 && ly != 7 && lz != 7) {
+    // All eight in one block (343 of 512 cells): fixed offsets.
+    const Voxel* base = &b0->voxels[hf_voxel_index(lx, ly, lz)];
+    v[0] = base, v[1] = base + 1, v[2] = base + 8, v[3] = base + 9;
+    v[4] = base + 64, v[5] = base + 65, v[6] = base + 72, v[7] = base + 73;
+    return;
+  }
+  // Across a block border: each distinct block of the 2 x 2 x 2 looked up once.
+  const bool cx = lx == 7, cy = ly == 7, cz = lz == 7;
+  const VoxelBlock* B[8];
+  B[0] = b0;
+  B[1] = cx ? block_or_empty(bx + 1, by, bz) : b0;
+  B[2] = cy ? block_or_empty(bx, by + 1, bz) : b0;
+  B[3] = cy ? (cx ? block_or_empty(bx + 1, by + 1, bz) : B[2]) : B[1];
+  for (int c = 0; c < 4; ++c) B[4 + c] = B[c];
+  if (cz) {
+    B[4] = block_or_empty(bx, by, bz + 1);
+    B[5] = cx ? block_or_empty(bx + 1, by, bz + 1) : B[4];
+    B[6] = cy ? block_or_empty(bx, by + 1, bz + 1) : B[4];
+    B[7] = cy ? (cx ? block_or_empty(bx + 1, by + 1, bz + 1) : B[6]) : B[5];
+  }
+  const int x[2] = {lx, (lx + 1) & 7}, y[2] = {ly, (ly + 1) & 7}, z[2] = {lz, (lz + 1) & 7};
+  for (int c = 0; c < 8; ++c) v[c] = &B[c]->voxels[hf_voxel_index(x[c & 1], y[(c >> 1) & 1], z[c >> 2])];
+}
+
+#if defined(__SSE2__)
+namespace {
+
+// Two pairs of neighbouring voxels (p[0], p[1], q[0], q[1]) in one go: their raw SDF as floats (lanes in that
+// order), and the lanes whose weight is below min_weight OR-ed into *bad. A voxel's low 32 bits are
+// sdf | weight << 16 (little-endian x86, fusion/kernels/voxel.h).
+inline __m128 sdf_weight_2x2(const Voxel* p, const Voxel* q, __m128i min_weight, __m128i* bad) {
+  static_assert(offsetof(Voxel, sdf) == 0 && offsetof(Voxel, weight) == 2, "voxel layout");
+  const __m128i a = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+  const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(q));
+  const __m128i lo = _mm_unpacklo_epi64(_mm_shuffle_epi32(a, _MM_SHUFFLE(3, 1, 2, 0)),
+                                        _mm_shuffle_epi32(b, _MM_SHUFFLE(3, 1, 2, 0)));
+  *bad = _mm_or_si128(*bad, _mm_cmplt_epi32(_mm_srli_epi32(lo, 16), min_weight));
+  return _mm_cvtepi32_ps(_mm_srai_epi32(_mm_slli_epi32(lo, 16), 16));
+}
+
+// The same for four voxels anywhere.
+inline std::int32_t low_bits(const Voxel* v) {
+  std::int32_t x;
+  std::memcpy(&x, v, sizeof x);
+  return x;
+}
+inline __m128 sdf_weight_4(const Voxel* a, const Voxel* b, const Voxel* c, const Voxel* d, __m128i min_weight,
+                           __m128i* bad) {
+  const __m128i lo = _mm_setr_epi32(low_bits(a), low_bits(b), low_bits(c), low_bits(d));
+  *bad = _mm_or_si128(*bad, _mm_cmplt_epi32(_mm_srli_epi32(lo, 16), min_weight));
+  return _mm_cvtepi32_ps(_mm_srai_epi32(_mm_slli_epi32(lo, 16), 16));
+}
+
+}  // namespace
+#endif
+
+const float* VolumeSampler::cell(int i, int j, int k) {
+  if (i == ci_ && j == cj_ && k == ck_) return cell_ok_ ? cell_ : nullptr;
+  ci_ = i, cj_ = j, ck_ = k;
+#if defined(__SSE2__)
+  const __m128i min_weight = _mm_set1_epi32(min_weight_raw_);
+  __m128i bad = _mm_setzero_si128();
+  const int lx = i & 7, ly = j & 7, lz = k & 7;
+  if (lx != 7) {
+    // Corners (0, 1), (2, 3), (4, 5), (6, 7) are adjacent pairs in memory, in up to four blocks (y and z).
+    const int bx = i >> 3, by = j >> 3, bz = k >> 3;
+    const VoxelBlock* b00 = block_or_empty(bx, by, bz);
+    const VoxelBlock* b10 = ly == 7 ? block_or_empty(bx, by + 1, bz) : b00;
+    const VoxelBlock* b01 = lz == 7 ? block_or_empty(bx, by, bz + 1) : b00;
+    const VoxelBlock* b11 = ly == 7 ? (lz == 7 ? block_or_empty(bx, by + 1, bz + 1) : b10) : b01;
+    const int ly1 = (ly + 1) & 7, lz1 = (lz + 1) & 7;
+    _mm_storeu_ps(cell_, sdf_weight_2x2(&b00->voxels[hf_voxel_index(lx, ly, lz)],
+                                        &b10->voxels[hf_voxel_index(lx, ly1, lz)], min_weight, &bad));
+    _mm_storeu_ps(cell_ + 4, sdf_weight_2x2(&b01->voxels[hf_voxel_index(lx, ly, lz1)],
+                                            &b11->voxels[hf_voxel_index(lx, ly1, lz1)], min_weight, &bad));
+  } else {
+    const Voxel* v[8];
+    gather_cell(i, j, k, v);
+    _mm_storeu_ps(cell_, sdf_weight_4(v[0], v[1], v[2], v[3], min_weight, &bad));
+    _mm_storeu_ps(cell_ + 4, sdf_weight_4(v[4], v[5], v[6], v[7], min_weight, &bad));
+  }
+  cell_ok_ = _mm_movemask_epi8(bad) == 0;
+  return cell_ok_ ? cell_ : nullptr;
+#else
   const Voxel* v[8];
+  gather_cell(i, j, k, v);
+  bool ok = true;
+  for (int c = 0; c < 8; ++c) {
+    ok &= v[c]->weight >= min_weight_raw_;  // no early exit: the eight loads are issued together
+    cell_[c] = float(v[c]->sdf);
+  }
+  cell_ok_ = ok;
+  return ok ? cell_ : nullptr;
+#endif
+}
+
+bool VolumeSampler::sdf(const Eigen::Vector3f& p_vox, float* out) {
+  int i, j, k;
   float f[3];
-  if (!corners(p_vox, v, f)) return false;
-  *out = raw_trilinear(v, f) * kInvSdfScale;
+  if (!cell_of(p_vox, &i, &j, &k, f)) return false;
+  const float* c = cell(i, j, k);
+  if (c == nullptr) return false;
+  *out = hf_trilinear(c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], f[0], f[1], f[2]) * kInvSdfScale;
   return true;
 }
 
 bool VolumeSampler::sdf_color(const Eigen::Vector3f& p_vox, float* out, Eigen::Vector3f* rgb) {
-  const Voxel* v[8];
+  int i, j, k;
   float f[3];
-  if (!corners(p_vox, v, f)) return false;
+  if (!cell_of(p_vox, &i, &j, &k, f)) return false;
+  const Voxel* v[8];
+  gather_cell(i, j, k, v);
+  bool ok = true;
+  for (int c = 0; c < 8; ++c) ok &= v[c]->weight >= min_weight_raw_;
+  if (!ok) return false;
   *out = raw_trilinear(v, f) * kInvSdfScale;
   auto channel = [&](auto get) {
     return hf_trilinear(float(get(v[0])), float(get(v[1])), float(get(v[2])), float(get(v[3])), float(get(v[4])),
@@ -122,53 +264,17 @@ bool VolumeSampler::sdf_color(const Eigen::Vector3f& p_vox, float* out, Eigen::V
   return true;
 }
 
-template <int N>
-bool VolumeSampler::row(int i, int j, int k, float* out) {
-  bool ok = true;
-  if ((i & 7) + N <= 8) {
-    const Voxel* v = voxel(i, j, k);
-    if (v == nullptr) return false;
-    for (int c = 0; c < N; ++c) {
-      ok &= v[c].weight >= min_weight_raw_;  // no early exit: all N loads are issued together
-      out[c] = float(v[c].sdf);
-    }
-    return ok;
-  }
-  for (int c = 0; c < N; ++c) {
-    const Voxel* v = voxel(i + c, j, k);
-    if (!observed(v)) return false;
-    out[c] = float(v->sdf);
-  }
-  return true;
-}
+namespace {
 
-bool VolumeSampler::normal_one_voxel(const Eigen::Vector3f& p_vox, Eigen::Vector3f* n) {
-  const float bx = std::floor(p_vox.x()), by = std::floor(p_vox.y()), bz = std::floor(p_vox.z());
-  constexpr float kLimit = 1.0e9f;
-  if (!(std::fabs(bx) < kLimit && std::fabs(by) < kLimit && std::fabs(bz) < kLimit)) return false;
-  const int i = int(bx), j = int(by), k = int(bz);
-  const float fx = p_vox.x() - bx, fy = p_vox.y() - by, fz = p_vox.z() - bz;
-  // s[1 + dz][1 + dy][1 + dx] = voxel (i + dx, j + dy, k + dz), dx, dy, dz in -1 .. 2. The samples at p -+ e_x
-  // need the central 2 x 2 rows (dy, dz in 0 .. 1) over dx = -1 .. 2; those at p -+ e_y and p -+ e_z need the
-  // rows around them over dx = 0 .. 1. The four corner rows (dy and dz both outside 0 .. 1) are not needed.
-  float s[4][4][4] = {};
-  bool ok = true;
-  for (int dz = 0; dz <= 1; ++dz)
-    for (int dy = 0; dy <= 1; ++dy) ok = ok && row<4>(i - 1, j + dy, k + dz, &s[1 + dz][1 + dy][0]);
-  for (int e = 0; e <= 1; ++e) {
-    const int d = e == 0 ? -1 : 2;  // the rows one voxel outside the central 2 x 2 in y, then in z
-    for (int c = 0; c <= 1; ++c) {
-      ok = ok && row<2>(i, j + d, k + c, &s[1 + c][1 + d][1]);
-      ok = ok && row<2>(i, j + c, k + d, &s[1 + d][1 + c][1]);
-    }
-  }
-  if (!ok) return false;
-  // Raw int16 values: the gradient's scale drops out of the normal.
-  // The trilinear sample whose corner (0, 0, 0) is voxel (i + ox, j + oy, k + oz), at the shared offset f.
+// The unit normal from the 4 x 4 x 4 neighbourhood s[1 + dz][1 + dy][1 + dx] = voxel (i + dx, j + dy, k + dz) of
+// raw int16 values (only the 32 voxels central differences reach need be set; the gradient's scale drops out) at
+// the shared offset f: central differences of the trilinear samples one voxel apart.
+bool normal_of_neighbourhood(const float s[4][4][4], const float f[3], Eigen::Vector3f* n) {
+  // The trilinear sample whose corner (0, 0, 0) is voxel (i + ox, j + oy, k + oz).
   auto sample = [&](int ox, int oy, int oz) {
     const int x = 1 + ox, y = 1 + oy, z = 1 + oz;
     return hf_trilinear(s[z][y][x], s[z][y][x + 1], s[z][y + 1][x], s[z][y + 1][x + 1], s[z + 1][y][x],
-                        s[z + 1][y][x + 1], s[z + 1][y + 1][x], s[z + 1][y + 1][x + 1], fx, fy, fz);
+                        s[z + 1][y][x + 1], s[z + 1][y + 1][x], s[z + 1][y + 1][x + 1], f[0], f[1], f[2]);
   };
   const hf_float4 nn = hf_normal_from_differences(sample(1, 0, 0) - sample(-1, 0, 0),
                                                   sample(0, 1, 0) - sample(0, -1, 0),
@@ -178,21 +284,177 @@ bool VolumeSampler::normal_one_voxel(const Eigen::Vector3f& p_vox, Eigen::Vector
   return true;
 }
 
+}  // namespace
+
 bool VolumeSampler::normal(const Eigen::Vector3f& p_vox, Eigen::Vector3f* n, float h_vox) {
-  if (h_vox == 1.0f) return normal_one_voxel(p_vox, n);
-  float d[3];
-  for (int a = 0; a < 3; ++a) {
-    Eigen::Vector3f lo = p_vox, hi = p_vox;
-    lo[a] -= h_vox;
-    hi[a] += h_vox;
-    float s_lo = 0.0f, s_hi = 0.0f;
-    if (!sdf(lo, &s_lo) || !sdf(hi, &s_hi)) return false;
-    d[a] = s_hi - s_lo;
+  if (h_vox != 1.0f) {
+    float d[3];
+    for (int a = 0; a < 3; ++a) {
+      Eigen::Vector3f lo = p_vox, hi = p_vox;
+      lo[a] -= h_vox;
+      hi[a] += h_vox;
+      float s_lo = 0.0f, s_hi = 0.0f;
+      if (!sdf(lo, &s_lo) || !sdf(hi, &s_hi)) return false;
+      d[a] = s_hi - s_lo;
+    }
+    const hf_float4 nn = hf_normal_from_differences(d[0], d[1], d[2]);
+    if (!hf_is_valid4(nn)) return false;
+    *n = Eigen::Vector3f(nn.x, nn.y, nn.z);
+    return true;
   }
-  const hf_float4 nn = hf_normal_from_differences(d[0], d[1], d[2]);
-  if (!hf_is_valid4(nn)) return false;
-  *n = Eigen::Vector3f(nn.x, nn.y, nn.z);
+  int i, j, k;
+  float f[3];
+  if (!cell_of(p_vox, &i, &j, &k, f)) return false;
+  // Voxels (i - 1 .. i + 2) on each axis: offset o = 0..3 is in the lower (sel 0) or upper (sel 1) of at most two
+  // blocks, at local coordinate l.
+  int sx[4], sy[4], sz[4], lxo[4], lyo[4], lzo[4];
+  for (int o = 0; o < 4; ++o) {
+    sx[o] = ((i - 1 + o) >> 3) - ((i - 1) >> 3), lxo[o] = (i - 1 + o) & 7;
+    sy[o] = ((j - 1 + o) >> 3) - ((j - 1) >> 3), lyo[o] = 8 * ((j - 1 + o) & 7);
+    sz[o] = ((k - 1 + o) >> 3) - ((k - 1) >> 3), lzo[o] = 64 * ((k - 1 + o) & 7);
+  }
+  const int bx = (i - 1) >> 3, by = (j - 1) >> 3, bz = (k - 1) >> 3;
+  const bool cx = sx[3] != 0, cy = sy[3] != 0, cz = sz[3] != 0;
+  const Voxel* B[8];
+  B[0] = block_or_empty(bx, by, bz)->voxels.data();
+  B[1] = cx ? block_or_empty(bx + 1, by, bz)->voxels.data() : B[0];
+  B[2] = cy ? block_or_empty(bx, by + 1, bz)->voxels.data() : B[0];
+  B[3] = cy ? (cx ? block_or_empty(bx + 1, by + 1, bz)->voxels.data() : B[2]) : B[1];
+  for (int c = 0; c < 4; ++c) B[4 + c] = B[c];
+  if (cz) {
+    B[4] = block_or_empty(bx, by, bz + 1)->voxels.data();
+    B[5] = cx ? block_or_empty(bx + 1, by, bz + 1)->voxels.data() : B[4];
+    B[6] = cy ? block_or_empty(bx, by + 1, bz + 1)->voxels.data() : B[4];
+    B[7] = cy ? (cx ? block_or_empty(bx + 1, by + 1, bz + 1)->voxels.data() : B[6]) : B[5];
+  }
+  // s[oz][oy][ox] = voxel (i - 1 + ox, j - 1 + oy, k - 1 + oz). The samples at p -+ e_x need the central 2 x 2
+  // rows (oy, oz in 1 .. 2) over ox = 0 .. 3; those at p -+ e_y and p -+ e_z need the rows around them over
+  // ox = 1 .. 2. The four corner rows (oy and oz both outside 1 .. 2) are not needed.
+  float s[4][4][4] = {};
+#if defined(__SSE2__)
+  {
+    // Four voxels of a central row, or the x = 1 .. 2 voxels of two outer rows, per sdf_weight_2x2 (pairs
+    // contiguous in memory when the four x offsets lie in one block, 5 of 8 cells) or sdf_weight_4.
+    const __m128i min_weight = _mm_set1_epi32(min_weight_raw_);
+    __m128i bad = _mm_setzero_si128();
+    auto at = [&](int ox, int oy, int oz) {
+      return B[sx[ox] + 2 * sy[oy] + 4 * sz[oz]] + lxo[ox] + lyo[oy] + lzo[oz];
+    };
+    __m128 central[4], ys[2], zs[2];
+    if (!cx) {
+      auto row = [&](int oy, int oz) { return B[2 * sy[oy] + 4 * sz[oz]] + lyo[oy] + lzo[oz] + lxo[0]; };
+      for (int r = 0; r < 4; ++r) {
+        const Voxel* v = row(1 + (r & 1), 1 + (r >> 1));
+        central[r] = sdf_weight_2x2(v, v + 2, min_weight, &bad);
+      }
+      for (int e = 0; e < 2; ++e) {
+        ys[e] = sdf_weight_2x2(row(3 * e, 1) + 1, row(3 * e, 2) + 1, min_weight, &bad);
+        zs[e] = sdf_weight_2x2(row(1, 3 * e) + 1, row(2, 3 * e) + 1, min_weight, &bad);
+      }
+    } else {
+      for (int r = 0; r < 4; ++r) {
+        const int oy = 1 + (r & 1), oz = 1 + (r >> 1);
+        central[r] = sdf_weight_4(at(0, oy, oz), at(1, oy, oz), at(2, oy, oz), at(3, oy, oz), min_weight, &bad);
+      }
+      for (int e = 0; e < 2; ++e) {
+        ys[e] = sdf_weight_4(at(1, 3 * e, 1), at(2, 3 * e, 1), at(1, 3 * e, 2), at(2, 3 * e, 2), min_weight, &bad);
+        zs[e] = sdf_weight_4(at(1, 1, 3 * e), at(2, 1, 3 * e), at(1, 2, 3 * e), at(2, 2, 3 * e), min_weight, &bad);
+      }
+    }
+    if (_mm_movemask_epi8(bad) != 0) return false;
+    for (int r = 0; r < 4; ++r) _mm_storeu_ps(&s[1 + (r >> 1)][1 + (r & 1)][0], central[r]);
+    for (int e = 0; e < 2; ++e) {
+      _mm_storel_pi(reinterpret_cast<__m64*>(&s[1][3 * e][1]), ys[e]);
+      _mm_storeh_pi(reinterpret_cast<__m64*>(&s[2][3 * e][1]), ys[e]);
+      _mm_storel_pi(reinterpret_cast<__m64*>(&s[3 * e][1][1]), zs[e]);
+      _mm_storeh_pi(reinterpret_cast<__m64*>(&s[3 * e][2][1]), zs[e]);
+    }
+  }
+#else
+  unsigned ok = 1;
+  // Rows along x; when the four x offsets lie in one block (5 of 8 cells) a row is contiguous in memory.
+  auto gather = [&](auto x_in_one_block) {
+    auto load_row = [&](int oy, int oz, int ox0, int ox1) {
+      const int yz = 2 * sy[oy] + 4 * sz[oz], off = lyo[oy] + lzo[oz];
+      if constexpr (decltype(x_in_one_block)::value) {
+        const Voxel* r = B[yz] + off + lxo[0];
+        for (int ox = ox0; ox <= ox1; ++ox) {
+          ok &= unsigned(r[ox].weight >= min_weight_raw_);
+          s[oz][oy][ox] = float(r[ox].sdf);
+        }
+      } else {
+        for (int ox = ox0; ox <= ox1; ++ox) {
+          const Voxel& v = B[yz + sx[ox]][off + lxo[ox]];
+          ok &= unsigned(v.weight >= min_weight_raw_);
+          s[oz][oy][ox] = float(v.sdf);
+        }
+      }
+    };
+    for (int oz = 1; oz <= 2; ++oz)
+      for (int oy = 1; oy <= 2; ++oy) load_row(oy, oz, 0, 3);
+    for (int e = 0; e <= 3; e += 3)
+      for (int c = 1; c <= 2; ++c) {
+        load_row(e, c, 1, 2);
+        load_row(c, e, 1, 2);
+      }
+  };
+  if (cx)
+    gather(std::false_type{});
+  else
+    gather(std::true_type{});
+  if (!ok) return false;
+#endif
+  return normal_of_neighbourhood(s, f, n);
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// The general paths (references for the fast ones above)
+
+bool VolumeSampler::corners_reference(const Eigen::Vector3f& p_vox, const Voxel* v[8], float f[3]) {
+  int i, j, k;
+  if (!cell_of(p_vox, &i, &j, &k, f)) return false;
+  for (int c = 0; c < 8; ++c) v[c] = voxel(i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2));
+  for (int c = 0; c < 8; ++c)
+    if (!observed(v[c])) return false;
   return true;
+}
+
+bool VolumeSampler::sdf_reference(const Eigen::Vector3f& p_vox, float* out) {
+  const Voxel* v[8];
+  float f[3];
+  if (!corners_reference(p_vox, v, f)) return false;
+  *out = raw_trilinear(v, f) * kInvSdfScale;
+  return true;
+}
+
+template <int N>
+bool VolumeSampler::row(int i, int j, int k, float* out) {
+  for (int c = 0; c < N; ++c) {
+    const Voxel* v = voxel(i + c, j, k);
+    if (!observed(v)) return false;
+    out[c] = float(v->sdf);
+  }
+  return true;
+}
+
+bool VolumeSampler::normal_reference(const Eigen::Vector3f& p_vox, Eigen::Vector3f* n) {
+  int i, j, k;
+  float f[3];
+  if (!cell_of(p_vox, &i, &j, &k, f)) return false;
+  // s[1 + dz][1 + dy][1 + dx] = voxel (i + dx, j + dy, k + dz), dx, dy, dz in -1 .. 2.
+  float s[4][4][4] = {};
+  bool ok = true;
+  for (int dz = 0; dz <= 1; ++dz)
+    for (int dy = 0; dy <= 1; ++dy) ok = ok && row<4>(i - 1, j + dy, k + dz, &s[1 + dz][1 + dy][0]);
+  for (int e = 0; e <= 1; ++e) {
+    const int d = e == 0 ? -1 : 2;
+    for (int c = 0; c <= 1; ++c) {
+      ok = ok && row<2>(i, j + d, k + c, &s[1 + c][1 + d][1]);
+      ok = ok && row<2>(i, j + c, k + d, &s[1 + d][1 + c][1]);
+    }
+  }
+  if (!ok) return false;
+  return normal_of_neighbourhood(s, f, n);
 }
 
 // ---------------------------------------------------------------------------------------------------------------
@@ -268,9 +530,10 @@ bool march(VolumeSampler& sampler, const Eigen::Vector3f& o_vox, const Eigen::Ve
   float fine_until = -1.0f;  // no cheap steps before this t (set when a bracket is walked again)
   while (t < t_max) {
     const Eigen::Vector3f p = o_vox + t * d_vox;
-    const float fi = std::floor(p.x() + 0.5f), fj = std::floor(p.y() + 0.5f), fk = std::floor(p.z() + 0.5f);
-    if (!(std::fabs(fi) < 1e8f && std::fabs(fj) < 1e8f && std::fabs(fk) < 1e8f)) return false;
-    const int i = int(fi), j = int(fj), k = int(fk);
+    int ijk[3];  // the nearest voxel
+    float unused[3];
+    if (!floor3(p.x() + 0.5f, p.y() + 0.5f, p.z() + 0.5f, 1e8f, ijk, unused)) return false;
+    const int i = ijk[0], j = ijk[1], k = ijk[2];
     const VoxelBlock* block = sampler.block(i >> 3, j >> 3, k >> 3);
     if (block == nullptr) {
       // Jump to where the ray leaves this block, or its whole region when that holds no block at all.

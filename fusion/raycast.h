@@ -101,8 +101,10 @@ class BlockLookup {
 };
 
 // Voxel access and trilinear sampling in continuous voxel coordinates (voxel centres at integers, see
-// VoxelBlockGrid::voxel_coords). Caches the last block, so neighbouring samples cost no hash lookup. One sampler per
-// thread (not thread-safe itself); many samplers may share one BlockLookup.
+// VoxelBlockGrid::voxel_coords). Caches the last blocks, so neighbouring samples cost no hash lookup, and the last
+// trilinear cell's eight values, so samples in the same cell (a march's short steps near the surface, the
+// refinement of a crossing) cost no gather. One sampler per thread (not thread-safe itself); many samplers may
+// share one BlockLookup. The caches only save work: every result equals the uncached computation bit for bit.
 class VolumeSampler {
  public:
   // Voxels with weight < min_weight count as unobserved, as do never-observed voxels (weight 0) always.
@@ -141,15 +143,26 @@ class VolumeSampler {
   // Unit SDF gradient (pointing into free space) by central differences of trilinear samples h_vox apart; false
   // when a sample is unobserved or the gradient vanishes. For h_vox = 1 the six samples share their fractional
   // offset, so their 48 corners are 32 voxels of the 4 x 4 x 4 neighbourhood of p_vox: those are gathered once
-  // (row by row within a block) instead of six separate trilinear look-ups.
+  // (the at most 8 blocks it touches looked up once, no per-voxel branch) instead of six separate trilinear
+  // look-ups.
   bool normal(const Eigen::Vector3f& p_vox, Eigen::Vector3f* n, float h_vox = 1.0f);
 
+  // The general paths the fast ones above replace, kept as their reference (tests/fusion/test_raycast.cpp holds
+  // sdf, sdf_color and normal to them bit for bit): every voxel through voxel(), no cell cache, early exits.
+  bool sdf_reference(const Eigen::Vector3f& p_vox, float* sdf);
+  bool normal_reference(const Eigen::Vector3f& p_vox, Eigen::Vector3f* n);
+
  private:
-  bool corners(const Eigen::Vector3f& p_vox, const Voxel* v[8], float f[3]);
+  // A missing block reads as this one: all voxels unobserved (weight 0), so gathers need no null checks.
+  const VoxelBlock* block_or_empty(int bx, int by, int bz);
+  // The eight corner voxels of cell (i, j, k) (corner c = x + 2 y + 4 z), never nullptr.
+  void gather_cell(int i, int j, int k, const Voxel* v[8]);
+  // The raw (int16 as float) SDF of cell (i, j, k)'s corners, or nullptr when one is unobserved; cached.
+  const float* cell(int i, int j, int k);
+  bool corners_reference(const Eigen::Vector3f& p_vox, const Voxel* v[8], float f[3]);
   // Raw (int16 as float) SDF of voxels (i .. i + N - 1, j, k) into out; false when one is unobserved.
   template <int N>
   bool row(int i, int j, int k, float* out);
-  bool normal_one_voxel(const Eigen::Vector3f& p_vox, Eigen::Vector3f* n);
 
   const BlockLookup* lookup_;
   std::uint16_t min_weight_raw_;  // >= 1: weight 0 (never observed) is always unobserved
@@ -160,6 +173,9 @@ class VolumeSampler {
   CacheEntry cache_[8];
   int rx_ = -2147483647 - 1, ry_ = 0, rz_ = 0;
   bool region_ = false;
+  int ci_ = -2147483647 - 1, cj_ = 0, ck_ = 0;  // the cached cell (none yet)
+  bool cell_ok_ = false;
+  float cell_[8] = {};
 };
 
 struct RaycastOptions {
