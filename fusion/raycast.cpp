@@ -25,7 +25,7 @@ namespace hf::fusion {
 // ---------------------------------------------------------------------------------------------------------------
 // BlockLookup
 
-BlockLookup::BlockLookup(const VoxelBlockGrid& grid) : BlockLookup(grid.blocks()) {}
+BlockLookup::BlockLookup(const VoxelBlockGrid& grid) : BlockLookup(grid.blocks_unordered()) {}
 
 BlockLookup::BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBlock*>>& blocks) {
   size_ = blocks.size();
@@ -637,7 +637,9 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
   else
     out->shaded = ColorImage();
 
-  const BlockLookup lookup(grid);
+  // One snapshot of the blocks for the look-up table and the range image; neither depends on their order.
+  const auto blocks = grid.blocks_unordered();
+  const BlockLookup lookup(blocks);
   const double voxel_m = grid.params().voxel_m;
   const float mu_m = float(grid.params().truncation_m());
   const Eigen::Matrix3f R = T_world_camera.rotation().cast<float>();
@@ -662,7 +664,7 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
     const Eigen::Vector3d tcw = T_camera_world.translation();
     const double B = grid.params().block_m(), near_m = options.min_depth_m, far_m = options.max_depth_m;
     const Eigen::Vector3d ex = Rcw.col(0) * B, ey = Rcw.col(1) * B, ez = Rcw.col(2) * B;
-    for (const auto& [c, block] : grid.blocks()) {
+    for (const auto& [c, block] : blocks) {
       (void)block;
       Eigen::Vector3d p[8];
       const Eigen::Vector3d p0 = Rcw * (Eigen::Vector3d(c.x, c.y, c.z) * B) + tcw;
