@@ -55,6 +55,22 @@ VolumeParams params_1cm() {
 
 const PinholeCamera kCamera = PinholeCamera::preset("ros").scaled(2);  // 160 x 120
 
+// Fuses frames 0, step, 2 step, ... below `frames` of the room preset (Kinect-like noise) seen by kCamera into grid;
+// returns the last frame fused.
+datasets::SyntheticFrame fuse_noisy_room(VoxelBlockGrid& grid, int frames, int step) {
+  datasets::SyntheticOptions o;
+  o.preset = "room";
+  o.frames = frames;
+  o.camera = kCamera;
+  const datasets::SyntheticSequence seq(o);
+  datasets::SyntheticFrame f;
+  for (int i = 0; i < frames; i += step) {
+    f = seq.frame(i);
+    integrate(grid, f.depth, f.color, seq.camera(), f.T_world_camera);
+  }
+  return f;
+}
+
 TEST(RaycastKernels, TrilinearAndZeroCrossing) {
   // A linear function is reproduced exactly.
   auto f = [](float x, float y, float z) { return 0.3f + 0.5f * x - 0.25f * y + 0.125f * z; };
@@ -295,16 +311,8 @@ HintComparison compare_hint(const RaycastResult& plain, const RaycastResult& hin
 // chosen to straddle block borders (into missing blocks too), in sequences that hit the cell cache, and with a
 // minimum weight that makes part of the voxels unobserved.
 TEST(RaycastSampler, FastPathsMatchTheGeneralPathsBitForBit) {
-  datasets::SyntheticOptions o;
-  o.preset = "room";
-  o.frames = 12;
-  o.camera = kCamera;
-  const datasets::SyntheticSequence seq(o);
   VoxelBlockGrid grid(params_1cm());
-  for (int i = 0; i < 12; i += 3) {
-    const datasets::SyntheticFrame f = seq.frame(i);
-    integrate(grid, f.depth, f.color, seq.camera(), f.T_world_camera);
-  }
+  fuse_noisy_room(grid, 12, 3);
   const auto blocks = grid.blocks();
   ASSERT_GT(blocks.size(), 100u);
   const BlockLookup lookup(grid);
@@ -393,22 +401,13 @@ TEST(Raycast, DepthHintOnTheSphereMatchesTheFullMarch) {
 // pixels that differ are a small fraction (measured: 36 of 19 200 = 0.19 %, at depth edges and on noisy grazing
 // surfaces where the two marches meet different crossings of a multi-crossing field).
 TEST(Raycast, DepthHintOnTheNoisyRoomMatchesTheFullMarch) {
-  datasets::SyntheticOptions o;
-  o.preset = "room";
-  o.frames = 40;
-  o.camera = kCamera;
-  const datasets::SyntheticSequence seq(o);
   VoxelBlockGrid grid(params_1cm());
-  datasets::SyntheticFrame f;
-  for (int i = 0; i < 40; i += 4) {
-    f = seq.frame(i);
-    integrate(grid, f.depth, f.color, seq.camera(), f.T_world_camera);
-  }
+  const datasets::SyntheticFrame f = fuse_noisy_room(grid, 40, 4);
   RaycastOptions opts;
   opts.shade = false;
-  const RaycastResult plain = raycast(grid, seq.camera(), f.T_world_camera, opts);
+  const RaycastResult plain = raycast(grid, kCamera, f.T_world_camera, opts);
   opts.depth_hint = &f.depth;
-  const RaycastResult hinted = raycast(grid, seq.camera(), f.T_world_camera, opts);
+  const RaycastResult hinted = raycast(grid, kCamera, f.T_world_camera, opts);
   const HintComparison cmp = compare_hint(plain, hinted);
   const int n = kCamera.width * kCamera.height;
   ASSERT_GT(cmp.hits_plain, n * 9 / 10);
