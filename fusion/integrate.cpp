@@ -6,7 +6,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <climits>
 #include <cmath>
@@ -38,15 +37,16 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Per-thread list of touched blocks with a small direct-mapped cache: neighbouring pixels mostly cross the same
-// blocks (a 8 cm block spans ~20 pixels at 2 m), so the cache removes most duplicates before the sort.
+// Per-thread list of touched blocks with a direct-mapped cache: neighbouring pixels mostly cross the same blocks
+// (a 8 cm block spans ~20 pixels at 2 m), so the cache removes most duplicates before the serial sort. 4096
+// entries hold a frame's few thousand blocks (room, 1 cm: ~3 300) with few collisions; with 256 the sort got
+// ~29 k keys for them and took 1.8-2.0 ms of the 6.6-7.1 ms allocation.
 struct TouchedList {
   std::vector<std::uint64_t> keys;
-  std::array<std::uint64_t, 256> cache;
-  TouchedList() { cache.fill(~std::uint64_t(0)); }
+  std::vector<std::uint64_t> cache = std::vector<std::uint64_t>(4096, ~std::uint64_t(0));
   void add(int x, int y, int z) {
     const std::uint64_t k = pack(x, y, z);
-    std::uint64_t& slot = cache[(k * 0x9E3779B97F4A7C15ull) >> 56];
+    std::uint64_t& slot = cache[(k * 0x9E3779B97F4A7C15ull) >> 52];
     if (slot == k) return;
     slot = k;
     keys.push_back(k);
