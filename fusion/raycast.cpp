@@ -501,6 +501,12 @@ struct Hit {
   Eigen::Vector3f p_vox;
 };
 
+// What every ray of one raycast() shares (metres; step_fraction and min_step from RaycastOptions, refine_tol_m
+// from its refine_tol_vox).
+struct MarchParams {
+  float mu_m, step_fraction, min_step_m, voxel_m, refine_tol_m;
+};
+
 // Marches one ray; see raycast.h for the scheme. o and d are in continuous voxel coordinates (d has length 1 voxel
 // per voxel_m metres, i.e. d = unit direction / voxel_m) so block and voxel indices come without divisions.
 //
@@ -511,9 +517,10 @@ struct Hit {
 // bound without interpolating. Only near the surface are trilinear samples taken; when a negative sample follows
 // such a cheap step, the ray goes back to where that step started and walks the stretch again with trilinear
 // samples only, so the bracket it refines is the one the all-trilinear march would have found.
-bool march(VolumeSampler& sampler, const Eigen::Vector3f& o_vox, const Eigen::Vector3f& d_vox, float t_min,
-           float t_max, float mu_m, float step_fraction, float min_step_m, float voxel_m, float refine_tol_m,
-           Hit* hit) {
+bool march(VolumeSampler& sampler, const MarchParams& m, const Eigen::Vector3f& o_vox, const Eigen::Vector3f& d_vox,
+           float t_min, float t_max, Hit* hit) {
+  const float mu_m = m.mu_m, step_fraction = m.step_fraction, min_step_m = m.min_step_m, voxel_m = m.voxel_m;
+  const float refine_tol_m = m.refine_tol_m;
   constexpr float kFarSdf = 0.5f;
   constexpr int kRefineSteps = 6;
   const float far_margin_m = 0.8660254f * voxel_m;
@@ -645,9 +652,8 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
   const Eigen::Matrix3f R = T_world_camera.rotation().cast<float>();
   const Eigen::Matrix3f R_cw = R.transpose();
   const Eigen::Vector3f o_vox = (T_world_camera.translation() / voxel_m).cast<float>() - Eigen::Vector3f::Constant(0.5f);
-  const float step_fraction = float(options.step_fraction);
-  const float min_step_m = float(options.min_step_vox * voxel_m);
-  const float refine_tol_m = float(options.refine_tol_vox * voxel_m);
+  const MarchParams march_params{mu_m, float(options.step_fraction), float(options.min_step_vox * voxel_m),
+                                 float(voxel_m), float(options.refine_tol_vox * voxel_m)};
   const DepthImage* hint_image = options.depth_hint;
 
   // Depth range per 8 x 8 pixel tile (InfiniTAM's range image): a ray can only hit inside an allocated block, so
@@ -728,16 +734,14 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
       const float w = hf_raycast_hint_halfwidth(hint, mu_m, float(voxel_m));
       const float z0 = std::max(float(options.min_depth_m), hint - w);
       const float z1 = std::min(float(options.max_depth_m), hint + w);
-      found = z0 < z1 && march(sampler, o_vox, d_vox, z0 * len, z1 * len, mu_m, step_fraction, min_step_m,
-                               float(voxel_m), refine_tol_m, &hit);
+      found = z0 < z1 && march(sampler, march_params, o_vox, d_vox, z0 * len, z1 * len, &hit);
     }
     if (!found) {
       const size_t tile = size_t(y / kTile) * TW + size_t(x / kTile);
       // One voxel of slack on both sides covers float rounding of the corner projections.
       const float z0 = std::max(float(options.min_depth_m), tile_near[tile] - float(voxel_m));
       const float z1 = std::min(float(options.max_depth_m), tile_far[tile] + float(voxel_m));
-      found = z0 < z1 && march(sampler, o_vox, d_vox, z0 * len, z1 * len, mu_m, step_fraction, min_step_m,
-                               float(voxel_m), refine_tol_m, &hit);
+      found = z0 < z1 && march(sampler, march_params, o_vox, d_vox, z0 * len, z1 * len, &hit);
     }
     if (!found) {
       out->depth(x, y) = 0.0f;
