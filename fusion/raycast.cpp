@@ -670,10 +670,29 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
     const Eigen::Vector3d tcw = T_camera_world.translation();
     const double B = grid.params().block_m(), near_m = options.min_depth_m, far_m = options.max_depth_m;
     const Eigen::Vector3d ex = Rcw.col(0) * B, ey = Rcw.col(1) * B, ez = Rcw.col(2) * B;
+    // Most blocks of a map lie outside the view. A block whose bounding sphere is wholly beyond the near or far
+    // plane, or beyond a side plane of the slack-widened image (u = -1, u = W, v = -1, v = H, the bounds tested
+    // below), has every corner and near-plane crossing there too, so the exact test below would drop it as well:
+    // dropping it first changes no tile, only the cost (the map outgrows the view on every real sequence).
+    const double radius = 0.8660254037844386 * B;
+    // Signed distance of a camera-frame point (x or y, z) from the side plane {x = a z} (or y), positive on the
+    // side of larger x: (x - a z) / sqrt(1 + a^2).
+    struct Side {
+      double a, inv_norm;
+      double distance(double xy, double z) const { return (xy - a * z) * inv_norm; }
+    };
+    auto side = [](double a) { return Side{a, 1.0 / std::sqrt(1.0 + a * a)}; };
+    const Side left = side((-1.0 - camera.cx) / camera.fx), right = side((W - camera.cx) / camera.fx);
+    const Side top = side((-1.0 - camera.cy) / camera.fy), bottom = side((H - camera.cy) / camera.fy);
     for (const auto& [c, block] : blocks) {
       (void)block;
       Eigen::Vector3d p[8];
       const Eigen::Vector3d p0 = Rcw * (Eigen::Vector3d(c.x, c.y, c.z) * B) + tcw;
+      const Eigen::Vector3d centre = p0 + 0.5 * (ex + ey + ez);
+      if (centre.z() + radius < near_m || centre.z() - radius > far_m) continue;
+      if (left.distance(centre.x(), centre.z()) < -radius || right.distance(centre.x(), centre.z()) > radius ||
+          top.distance(centre.y(), centre.z()) < -radius || bottom.distance(centre.y(), centre.z()) > radius)
+        continue;
       double zmin = std::numeric_limits<double>::infinity(), zmax = -zmin;
       for (int k = 0; k < 8; ++k) {
         p[k] = p0 + double(k & 1) * ex + double((k >> 1) & 1) * ey + double(k >> 2) * ez;
