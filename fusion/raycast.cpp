@@ -7,7 +7,6 @@
 #include <cstring>
 #include <limits>
 #include <string>
-#include <tuple>
 #include <type_traits>
 
 #if defined(__SSE2__)
@@ -46,21 +45,28 @@ BlockLookup::BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBloc
     slots_[i] = Slot{c.x, c.y, c.z, block};
   }
   // Regions: at most as many as blocks, usually far fewer; a table 2^extra times smaller than slots_ takes the
-  // same hash's top bits.
-  std::vector<Slot> occupied;
-  for (const Slot& s : slots_)
-    if (s.block != nullptr) occupied.push_back(Slot{s.x >> kRegionShift, s.y >> kRegionShift, s.z >> kRegionShift, s.block});
-  std::sort(occupied.begin(), occupied.end(), [](const Slot& a, const Slot& b) {
-    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
-  });
-  occupied.erase(std::unique(occupied.begin(), occupied.end(),
-                             [](const Slot& a, const Slot& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }),
-                 occupied.end());
-  const size_t nr = std::bit_ceil(std::max<size_t>(16, 2 * occupied.size()));
+  // same hash's top bits. The distinct regions are found by inserting every block's region into a scratch table
+  // as large as slots_ (no sort: sorting the blocks' regions took ~1.3 % of the SLAM pipeline's time), then moved
+  // into a table sized for them.
+  std::vector<Slot> scratch(n);
+  size_t distinct = 0;
+  for (const Slot& s : slots_) {
+    if (s.block == nullptr) continue;
+    const Slot r{s.x >> kRegionShift, s.y >> kRegionShift, s.z >> kRegionShift, s.block};
+    size_t i = slot_of(r.x, r.y, r.z);
+    while (scratch[i].block != nullptr && !(scratch[i].x == r.x && scratch[i].y == r.y && scratch[i].z == r.z))
+      i = (i + 1) & mask_;
+    if (scratch[i].block == nullptr) {
+      scratch[i] = r;
+      ++distinct;
+    }
+  }
+  const size_t nr = std::bit_ceil(std::max<size_t>(16, 2 * distinct));
   region_extra_shift_ = std::countr_zero(n) - std::countr_zero(nr);
   regions_.assign(nr, Slot{});
   region_mask_ = nr - 1;
-  for (const Slot& r : occupied) {
+  for (const Slot& r : scratch) {
+    if (r.block == nullptr) continue;
     size_t i = slot_of(r.x, r.y, r.z) >> region_extra_shift_;
     while (regions_[i].block != nullptr) i = (i + 1) & region_mask_;
     regions_[i] = r;
