@@ -16,6 +16,7 @@
 #include "fusion/integrate.h"
 #include "fusion/mesh.h"
 #include "fusion/raycast.h"
+#include "slam/pipeline.h"
 
 namespace {
 
@@ -76,20 +77,16 @@ BENCHMARK(BM_Raycast)->Args({10, 0})->Args({10, 1})->Args({5, 0})->Unit(benchmar
 
 // The SLAM pipeline's case: raycast at the pose of the frame just integrated (frame 76, the last one fused), with
 // that frame's depth as RaycastOptions::depth_hint (range(2) = 1) or without (0), no shading. range(1) is the
-// camera scale: 0 = 640x480, 1 = 320x240. range(3) = 1 takes the rest of the SLAM pipeline's tracking options
-// (slam/pipeline.h: no colour, crossing refined to 0.05 voxel); 0 keeps RaycastOptions' defaults.
+// camera scale: 0 = 640x480, 1 = 320x240. range(3) = 1 takes the SLAM pipeline's tracking options
+// (slam::PipelineConfig::raycast: no colour, crossing refined to 0.05 voxel); 0 keeps RaycastOptions' defaults.
 void BM_RaycastAtIntegratedPose(benchmark::State& state) {
   const double voxel_m = state.range(0) / 1000.0;
   Scene& s = room(voxel_m, int(state.range(1)));
   const datasets::SyntheticFrame f = s.seq->frame(76);
   RaycastResult out;
-  RaycastOptions opts;
+  RaycastOptions opts = state.range(3) != 0 ? slam::PipelineConfig().raycast : RaycastOptions{};
   opts.shade = false;
   if (state.range(2) != 0) opts.depth_hint = &f.depth;
-  if (state.range(3) != 0) {
-    opts.color = false;
-    opts.refine_tol_vox = 0.05;
-  }
   const double cpu0 = process_cpu_s();
   for (auto _ : state) {
     raycast(*s.grid, s.seq->camera(), f.T_world_camera, opts, &out);

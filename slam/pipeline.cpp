@@ -350,8 +350,6 @@ Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
     : config_(config), camera_(camera), tracking_camera_(camera.scaled(config.tracking_level)),
       grid_((config.validate(), config.volume)),
       reference_(std::make_unique<Reference>()) {
-  config_.raycast.shade = false;
-  config_.raycast.color = false;  // tracking never reads the model's colour (photometric rows are frame to frame)
   if (config_.registration != "groundtruth") {
     RegistrationOptions options = effective_registration_options(config_);
     if (int(options.iterations.size()) > config_.pyramid.levels)

@@ -57,10 +57,11 @@ struct PipelineConfig {
   std::string backend = "cpu";             // reduction backend: cpu | opencl
   fusion::VolumeParams volume;             // voxel_m 0.01, truncation 4 voxels, capacity, weight cap
   fusion::IntegrateParams integrate;
-  // shade and color are forced off for tracking (render() shades). The crossing is refined to 0.05 voxel, not to
-  // raycast's default 0.001 (which exists so hinted and full marches agree exactly): on fr1/rpy the ATE is the
-  // same to 1 um and the raycast ~10-15 % cheaper (bench/results/pipeline.md).
-  fusion::RaycastOptions raycast{.refine_tol_vox = 0.05};
+  // The tracking raycast. No shading and no colour: tracking reads neither (photometric rows are frame to frame;
+  // render() turns shading on for its own raycast). The crossing is refined to 0.05 voxel, not to raycast's
+  // default 0.001 (which exists so hinted and full marches agree exactly): on fr1/rpy the ATE is the same to 1 um
+  // and the raycast ~10-15 % cheaper (bench/results/pipeline.md).
+  fusion::RaycastOptions raycast{.refine_tol_vox = 0.05, .shade = false, .color = false};
   FramePyramidOptions pyramid;
   // The pyramid level tracking starts at: 0 = full resolution; 1 = half (DVO-SLAM tracked at 320x240 in real time
   // on one core). Tracking then uses pyramid.levels levels from there, and the model is raycast at that resolution;
