@@ -140,23 +140,10 @@ const VoxelBlock* VolumeSampler::block_or_empty(int bx, int by, int bz) {
   return b != nullptr ? b : &kEmptyBlock;
 }
 
-void VolumeSampler::gather_cell(int i, int j, int k, const Voxel* v[8]) {
-  const int lx = i & 7, ly = j & 7, lz = k & 7;
-  const int bx = i >> 3, by = j >> 3, bz = k >> 3;
-  const VoxelBlock* b0 = block_or_empty(bx, by, bz);
-  if (lx != 7 && ly != 7 && lz != 7) {
-    // All eight in one block (343 of 512 cells): fixed offsets.
-    const Voxel* base = &b0->voxels[hf_voxel_index(lx, ly, lz)];
-    v[0] = base, v[1] = base + 1, v[2] = base + 8, v[3] = base + 9;
-    v[4] = base + 64, v[5] = base + 65, v[6] = base + 72, v[7] = base + 73;
-    return;
-  }
-  // Across a block border: each distinct block of the 2 x 2 x 2 looked up once.
-  const bool cx = lx == 7, cy = ly == 7, cz = lz == 7;
-  const VoxelBlock* B[8];
-  B[0] = b0;
-  B[1] = cx ? block_or_empty(bx + 1, by, bz) : b0;
-  B[2] = cy ? block_or_empty(bx, by + 1, bz) : b0;
+void VolumeSampler::neighbour_blocks(int bx, int by, int bz, bool cx, bool cy, bool cz, const VoxelBlock* B[8]) {
+  B[0] = block_or_empty(bx, by, bz);
+  B[1] = cx ? block_or_empty(bx + 1, by, bz) : B[0];
+  B[2] = cy ? block_or_empty(bx, by + 1, bz) : B[0];
   B[3] = cy ? (cx ? block_or_empty(bx + 1, by + 1, bz) : B[2]) : B[1];
   for (int c = 0; c < 4; ++c) B[4 + c] = B[c];
   if (cz) {
@@ -165,6 +152,21 @@ void VolumeSampler::gather_cell(int i, int j, int k, const Voxel* v[8]) {
     B[6] = cy ? block_or_empty(bx, by + 1, bz + 1) : B[4];
     B[7] = cy ? (cx ? block_or_empty(bx + 1, by + 1, bz + 1) : B[6]) : B[5];
   }
+}
+
+void VolumeSampler::gather_cell(int i, int j, int k, const Voxel* v[8]) {
+  const int lx = i & 7, ly = j & 7, lz = k & 7;
+  const int bx = i >> 3, by = j >> 3, bz = k >> 3;
+  if (lx != 7 && ly != 7 && lz != 7) {
+    // All eight in one block (343 of 512 cells): fixed offsets.
+    const Voxel* base = &block_or_empty(bx, by, bz)->voxels[hf_voxel_index(lx, ly, lz)];
+    v[0] = base, v[1] = base + 1, v[2] = base + 8, v[3] = base + 9;
+    v[4] = base + 64, v[5] = base + 65, v[6] = base + 72, v[7] = base + 73;
+    return;
+  }
+  // Across a block border: each distinct block of the 2 x 2 x 2 looked up once.
+  const VoxelBlock* B[8];
+  neighbour_blocks(bx, by, bz, lx == 7, ly == 7, lz == 7, B);
   const int x[2] = {lx, (lx + 1) & 7}, y[2] = {ly, (ly + 1) & 7}, z[2] = {lz, (lz + 1) & 7};
   for (int c = 0; c < 8; ++c) v[c] = &B[c]->voxels[hf_voxel_index(x[c & 1], y[(c >> 1) & 1], z[c >> 2])];
 }
@@ -321,18 +323,10 @@ bool VolumeSampler::normal(const Eigen::Vector3f& p_vox, Eigen::Vector3f* n, flo
   }
   const int bx = (i - 1) >> 3, by = (j - 1) >> 3, bz = (k - 1) >> 3;
   const bool cx = sx[3] != 0, cy = sy[3] != 0, cz = sz[3] != 0;
+  const VoxelBlock* blocks[8];
+  neighbour_blocks(bx, by, bz, cx, cy, cz, blocks);
   const Voxel* B[8];
-  B[0] = block_or_empty(bx, by, bz)->voxels.data();
-  B[1] = cx ? block_or_empty(bx + 1, by, bz)->voxels.data() : B[0];
-  B[2] = cy ? block_or_empty(bx, by + 1, bz)->voxels.data() : B[0];
-  B[3] = cy ? (cx ? block_or_empty(bx + 1, by + 1, bz)->voxels.data() : B[2]) : B[1];
-  for (int c = 0; c < 4; ++c) B[4 + c] = B[c];
-  if (cz) {
-    B[4] = block_or_empty(bx, by, bz + 1)->voxels.data();
-    B[5] = cx ? block_or_empty(bx + 1, by, bz + 1)->voxels.data() : B[4];
-    B[6] = cy ? block_or_empty(bx, by + 1, bz + 1)->voxels.data() : B[4];
-    B[7] = cy ? (cx ? block_or_empty(bx + 1, by + 1, bz + 1)->voxels.data() : B[6]) : B[5];
-  }
+  for (int c = 0; c < 8; ++c) B[c] = blocks[c]->voxels.data();
   // s[oz][oy][ox] = voxel (i - 1 + ox, j - 1 + oy, k - 1 + oz). The samples at p -+ e_x need the central 2 x 2
   // rows (oy, oz in 1 .. 2) over ox = 0 .. 3; those at p -+ e_y and p -+ e_z need the rows around them over
   // ox = 1 .. 2. The four corner rows (oy and oz both outside 1 .. 2) are not needed.

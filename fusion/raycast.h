@@ -155,6 +155,9 @@ class VolumeSampler {
  private:
   // A missing block reads as this one: all voxels unobserved (weight 0), so gathers need no null checks.
   const VoxelBlock* block_or_empty(int bx, int by, int bz);
+  // The 2 x 2 x 2 blocks from (bx, by, bz) (index x + 2 y + 4 z), each distinct one looked up once: cx, cy, cz
+  // say whether the neighbourhood reaches the next block along x, y, z (else the entries repeat the lower ones).
+  void neighbour_blocks(int bx, int by, int bz, bool cx, bool cy, bool cz, const VoxelBlock* B[8]);
   // The eight corner voxels of cell (i, j, k) (corner c = x + 2 y + 4 z), never nullptr.
   void gather_cell(int i, int j, int k, const Voxel* v[8]);
   // The raw (int16 as float) SDF of cell (i, j, k)'s corners, or nullptr when one is unobserved; cached.
