@@ -94,31 +94,41 @@ void for_each_observed_voxel(const VoxelBlockGrid& grid, const PinholeCamera& ca
   }
 }
 
+// The scene of the tilted-plane tests: the plane n . p = offset (facing the camera) seen by a slightly rotated and
+// shifted camera, and its rendered depth.
+struct TiltedPlane {
+  PinholeCamera camera = small_camera();
+  Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.2, -1.0).normalized();
+  double offset = n.dot(Eigen::Vector3d(0.1, 0.0, 1.5));
+  SE3 T_world_camera{Eigen::Matrix3d(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY())),
+                     Eigen::Vector3d(0.05, -0.03, 0.0)};
+  DepthImage depth = render_plane_depth(camera, T_world_camera, n, offset);
+  // Integrates the depth (no colour) with projective or point-to-plane distances.
+  void fuse(VoxelBlockGrid& grid, bool point_to_plane) const {
+    IntegrateParams params;
+    params.point_to_plane = point_to_plane;
+    integrate(grid, depth, ColorImage(), camera, T_world_camera, params);
+  }
+};
+
 // A tilted plane seen from an offset, rotated camera, projective distances (point_to_plane off): each observed voxel
 // holds the projective TSDF
 // min(1, (d(u) - z) / mu) with u the nearest pixel of the voxel centre and d(u) the exact ray-plane depth, and
 // the sign of the stored value agrees with the true signed distance away from the surface.
 TEST(Integrate, TiltedPlaneMatchesProjectiveTsdf) {
-  const PinholeCamera camera = small_camera();
+  const TiltedPlane plane;
   const VolumeParams volume = params_1cm();
   VoxelBlockGrid grid(volume);
-  const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.2, -1.0).normalized();  // facing the camera
-  const double offset = n.dot(Eigen::Vector3d(0.1, 0.0, 1.5));
-  const SE3 T_world_camera(Eigen::Matrix3d(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY())),
-                           Eigen::Vector3d(0.05, -0.03, 0.0));
-  const DepthImage depth = render_plane_depth(camera, T_world_camera, n, offset);
-  IntegrateParams projective;
-  projective.point_to_plane = false;
-  integrate(grid, depth, ColorImage(), camera, T_world_camera, projective);
-  const SE3 T_camera_world = T_world_camera.inverse();
+  plane.fuse(grid, /*point_to_plane=*/false);
+  const SE3 T_camera_world = plane.T_world_camera.inverse();
   const double mu = volume.truncation_m();
   size_t checked = 0;
-  for_each_observed_voxel(grid, camera, T_camera_world, [&](const Voxel& v, const Eigen::Vector3d& p_world,
+  for_each_observed_voxel(grid, plane.camera, T_camera_world, [&](const Voxel& v, const Eigen::Vector3d& p_world,
                                                             const Eigen::Vector3d& p, int u, int w) {
-    const double d = depth(u, w);
+    const double d = plane.depth(u, w);
     const double expected = std::min(1.0, (d - p.z()) / mu);
     EXPECT_NEAR(hf_voxel_sdf(v), expected, 0.5 / HF_SDF_SCALE + 5e-5);
-    const double true_sdf = n.dot(p_world) - offset;  // positive on the camera side
+    const double true_sdf = plane.n.dot(p_world) - plane.offset;  // positive on the camera side
     if (std::abs(true_sdf) > 0.5 * volume.voxel_m) {
       EXPECT_EQ(hf_voxel_sdf(v) > 0, true_sdf > 0);
     }
@@ -132,14 +142,11 @@ TEST(Integrate, TiltedPlaneMatchesProjectiveTsdf) {
 // differences beside holes and depth jumps (exact for a plane either way); 0 on the border, on invalid pixels and
 // where a direction has no usable neighbour.
 TEST(Integrate, PointToPlaneFactorOfAPlane) {
-  const PinholeCamera camera = small_camera();
+  TiltedPlane plane;
+  const PinholeCamera& camera = plane.camera;
   const hf_intrinsics K = camera.kernel_intrinsics();
-  const Eigen::Vector3d n_world = Eigen::Vector3d(0.3, -0.2, -1.0).normalized();
-  const double offset = n_world.dot(Eigen::Vector3d(0.1, 0.0, 1.5));
-  const SE3 T_world_camera(Eigen::Matrix3d(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY())),
-                           Eigen::Vector3d(0.05, -0.03, 0.0));
-  DepthImage depth = render_plane_depth(camera, T_world_camera, n_world, offset);
-  const Eigen::Vector3d n = T_world_camera.rotation().transpose() * n_world;
+  DepthImage& depth = plane.depth;
+  const Eigen::Vector3d n = plane.T_world_camera.rotation().transpose() * plane.n;  // camera frame
   auto exact = [&](int u, int v) {
     return std::abs(n.dot(Eigen::Vector3d((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0)));
   };
@@ -183,36 +190,29 @@ TEST(Integrate, PointToPlaneFactorOfAPlane) {
 // up to the factor's float error; against the voxel centre itself the difference is the lateral offset of that
 // point (at most half a pixel in u and v) along the normal.
 TEST(Integrate, TiltedPlaneGivesTrueDistanceWithPointToPlane) {
-  const PinholeCamera camera = small_camera();
+  const TiltedPlane plane;
   const VolumeParams volume = params_1cm();
   VoxelBlockGrid grid(volume);
-  const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.2, -1.0).normalized();
-  const double offset = n.dot(Eigen::Vector3d(0.1, 0.0, 1.5));
-  const SE3 T_world_camera(Eigen::Matrix3d(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY())),
-                           Eigen::Vector3d(0.05, -0.03, 0.0));
-  const DepthImage depth = render_plane_depth(camera, T_world_camera, n, offset);
-  IntegrateParams params;
-  params.point_to_plane = true;
-  integrate(grid, depth, ColorImage(), camera, T_world_camera, params);
-  const SE3 T_camera_world = T_world_camera.inverse();
-  const Eigen::Vector3d n_cam = T_camera_world.rotation() * n;
+  plane.fuse(grid, /*point_to_plane=*/true);
+  const SE3 T_camera_world = plane.T_world_camera.inverse();
+  const Eigen::Vector3d n_cam = T_camera_world.rotation() * plane.n;
   const double mu = volume.truncation_m();
   size_t checked = 0, below_projective = 0;
   double max_err = 0.0, max_lateral = 0.0;
-  for_each_observed_voxel(grid, camera, T_camera_world, [&](const Voxel& v, const Eigen::Vector3d& p_world,
+  for_each_observed_voxel(grid, plane.camera, T_camera_world, [&](const Voxel& v, const Eigen::Vector3d& p_world,
                                                             const Eigen::Vector3d& p, int u, int w) {
-    if (u < 1 || w < 1 || u >= camera.width - 1 || w >= camera.height - 1) return;  // border: projective
+    if (u < 1 || w < 1 || u >= plane.camera.width - 1 || w >= plane.camera.height - 1) return;  // border: projective
     // The point of pixel (u, w)'s ray at the voxel's depth, and its true signed distance.
-    const Eigen::Vector3d q = camera.backproject(u, w, p.z());
-    const double sdf_q = n.dot(T_world_camera * q) - offset;
+    const Eigen::Vector3d q = plane.camera.backproject(u, w, p.z());
+    const double sdf_q = plane.n.dot(plane.T_world_camera * q) - plane.offset;
     const double expected = std::clamp(sdf_q / mu, -1.0, 1.0);
     max_err = std::max(max_err, std::abs(hf_voxel_sdf(v) - expected));
-    const double sdf_p = n.dot(p_world) - offset;
+    const double sdf_p = plane.n.dot(p_world) - plane.offset;
     // Lateral offset q - p: at most half a pixel in u and v at depth p.z, seen along the normal.
     const double lateral_bound =
-        (std::abs(n_cam.x()) / camera.fx + std::abs(n_cam.y()) / camera.fy) * 0.5 * p.z() + 1e-6;
+        (std::abs(n_cam.x()) / plane.camera.fx + std::abs(n_cam.y()) / plane.camera.fy) * 0.5 * p.z() + 1e-6;
     max_lateral = std::max(max_lateral, std::abs(sdf_q - sdf_p) / lateral_bound);
-    below_projective += std::abs(hf_voxel_sdf(v)) < 0.99 * std::min(1.0, std::abs(depth(u, w) - p.z()) / mu);
+    below_projective += std::abs(hf_voxel_sdf(v)) < 0.99 * std::min(1.0, std::abs(plane.depth(u, w) - p.z()) / mu);
     ++checked;
   });
   EXPECT_GT(checked, 10000u);
