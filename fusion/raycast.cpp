@@ -507,6 +507,36 @@ struct MarchParams {
   float mu_m, step_fraction, min_step_m, voxel_m, refine_tol_m;
 };
 
+// The crossing on a + to - bracket (ta, sa >= 0) .. (tb, sb < 0) along the ray: linear interpolation, then Illinois
+// regula falsi on the same bracket until the bracket is narrower than refine_tol_m or the sample at the estimate
+// predicts the crossing within refine_tol_m of it (|sdf| over the bracket's secant slope: regula falsi keeps one
+// end of the bracket, which then shrinks slowly although the estimate has long converged).
+// Converging, rather than stopping after a fixed number of steps, makes the result independent of where the march
+// happened to sample the bracket (the hinted and the full march agree), and costs only samples of voxels already
+// in cache. At most kRefineSteps samples.
+void refine(VolumeSampler& sampler, const MarchParams& m, const Eigen::Vector3f& o_vox, const Eigen::Vector3f& d_vox,
+            float ta, float sa, float tb, float sb, Hit* hit) {
+  constexpr int kRefineSteps = 6;
+  float tc = hf_zero_crossing(ta, sa, tb, sb);
+  int kept = 0;  // +1: the + end was kept last time, -1: the - end
+  for (int it = 0; it < kRefineSteps && tb - ta > m.refine_tol_m; ++it) {
+    float sc = 0.0f;
+    if (!sampler.sdf(o_vox + tc * d_vox, &sc) || std::fabs(sc) * (tb - ta) <= m.refine_tol_m * (sa - sb)) break;
+    if (sc > 0.0f) {
+      ta = tc, sa = sc;
+      if (kept == -1) sb *= 0.5f;  // Illinois: the - end stays again, halve its weight
+      kept = -1;
+    } else {
+      tb = tc, sb = sc;
+      if (kept == 1) sa *= 0.5f;
+      kept = 1;
+    }
+    tc = hf_zero_crossing(ta, sa, tb, sb);
+  }
+  hit->t = tc;
+  hit->p_vox = o_vox + tc * d_vox;
+}
+
 // Marches one ray; see raycast.h for the scheme. o and d are in continuous voxel coordinates (d has length 1 voxel
 // per voxel_m metres, i.e. d = unit direction / voxel_m) so block and voxel indices come without divisions.
 //
@@ -520,9 +550,7 @@ struct MarchParams {
 bool march(VolumeSampler& sampler, const MarchParams& m, const Eigen::Vector3f& o_vox, const Eigen::Vector3f& d_vox,
            float t_min, float t_max, Hit* hit) {
   const float mu_m = m.mu_m, step_fraction = m.step_fraction, min_step_m = m.min_step_m, voxel_m = m.voxel_m;
-  const float refine_tol_m = m.refine_tol_m;
   constexpr float kFarSdf = 0.5f;
-  constexpr int kRefineSteps = 6;
   const float far_margin_m = 0.8660254f * voxel_m;
   const bool cheap_steps = kFarSdf * mu_m - far_margin_m > min_step_m;
   // Block b holds continuous voxel coordinates [8 b - 0.5, 8 b + 7.5).
@@ -588,31 +616,7 @@ bool march(VolumeSampler& sampler, const MarchParams& m, const Eigen::Vector3f& 
         continue;
       }
       if (have_prev) {
-        // + to - : refine on the bracket [t_prev, t] (linear interpolation, then Illinois regula falsi until the
-        // bracket is below kRefineTol voxel). Converging, rather than stopping after a fixed number of steps,
-        // makes the result independent of where the march happened to sample the bracket (the hinted and the
-        // full march agree), and costs only samples of voxels already in cache.
-        float ta = t_prev, sa = s_prev, tb = t, sb = s;
-        float tc = hf_zero_crossing(ta, sa, tb, sb);
-        int kept = 0;  // +1: the + end was kept last time, -1: the - end
-        for (int it = 0; it < kRefineSteps && tb - ta > refine_tol_m; ++it) {
-          float sc = 0.0f;
-          if (!sampler.sdf(o_vox + tc * d_vox, &sc)) break;
-          if (sc > 0.0f) {
-            ta = tc, sa = sc;
-            if (kept == -1) sb *= 0.5f;  // Illinois: the - end stays again, halve its weight
-            kept = -1;
-          } else if (sc < 0.0f) {
-            tb = tc, sb = sc;
-            if (kept == 1) sa *= 0.5f;
-            kept = 1;
-          } else {
-            break;
-          }
-          tc = hf_zero_crossing(ta, sa, tb, sb);
-        }
-        hit->t = tc;
-        hit->p_vox = o_vox + tc * d_vox;
+        refine(sampler, m, o_vox, d_vox, t_prev, s_prev, t, s, hit);
         return true;
       }
       // Inside or behind a back face: keep going until the SDF turns positive again.
@@ -624,6 +628,29 @@ bool march(VolumeSampler& sampler, const MarchParams& m, const Eigen::Vector3f& 
     t += hf_raycast_step(s, mu_m, step_fraction, min_step_m);
   }
   return false;
+}
+
+// The search around a hinted depth (RaycastOptions::depth_hint): t_hint is where the frame just integrated along
+// this ray measured the surface, so the fused crossing is within noise of it. One trilinear sample there says on
+// which side of the surface it lies: in front (sdf >= 0), the march goes on forward to t_max; behind it, the ray
+// walks back towards the camera with the same SDF-bounded steps until a sample turns positive, which with the last
+// negative one brackets the crossing. False when neither finds a + to - crossing within [t_min, t_max] or the
+// walk back meets an unobserved sample (the caller then marches the whole ray).
+bool march_from_hint(VolumeSampler& sampler, const MarchParams& m, const Eigen::Vector3f& o_vox,
+                     const Eigen::Vector3f& d_vox, float t_hint, float t_min, float t_max, Hit* hit) {
+  float sb = 0.0f;
+  if (!sampler.sdf(o_vox + t_hint * d_vox, &sb)) return false;
+  if (sb >= 0.0f) return march(sampler, m, o_vox, d_vox, t_hint, t_max, hit);
+  for (float tb = t_hint;;) {
+    const float ta = tb - hf_raycast_step(sb, m.mu_m, m.step_fraction, m.min_step_m);
+    float sa = 0.0f;
+    if (ta < t_min || !sampler.sdf(o_vox + ta * d_vox, &sa)) return false;
+    if (sa >= 0.0f) {
+      refine(sampler, m, o_vox, d_vox, ta, sa, tb, sb, hit);
+      return true;
+    }
+    tb = ta, sb = sa;
+  }
 }
 
 }  // namespace
@@ -753,7 +780,8 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
       const float w = hf_raycast_hint_halfwidth(hint, mu_m, float(voxel_m));
       const float z0 = std::max(float(options.min_depth_m), hint - w);
       const float z1 = std::min(float(options.max_depth_m), hint + w);
-      found = z0 < z1 && march(sampler, march_params, o_vox, d_vox, z0 * len, z1 * len, &hit);
+      found = z0 <= hint && hint <= z1 &&
+              march_from_hint(sampler, march_params, o_vox, d_vox, hint * len, z0 * len, z1 * len, &hit);
     }
     if (!found) {
       const size_t tile = size_t(y / kTile) * TW + size_t(x / kTile);

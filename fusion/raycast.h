@@ -12,7 +12,8 @@
 // the surface it takes steps of step_fraction * sdf * mu (at least min_step_vox voxels), sampling the trilinearly
 // interpolated SDF. The first sign change from + to - is the surface (a change from - to +, seen when a
 // ray leaves the back of a surface, is ignored); the crossing is refined by linear interpolation of the two
-// bracketing samples, then Illinois regula falsi on the same bracket until it is below 0.001 voxel. Normals are
+// bracketing samples, then Illinois regula falsi on the same bracket until it, or the step the last sample predicts,
+// is below refine_tol_vox (0.001 voxel by default). Normals are
 // the normalised SDF gradient by central differences of trilinear samples one voxel apart (taken from one gathered
 // neighbourhood of 32 voxels, VolumeSampler::normal); colour is trilinear. With RaycastOptions::depth_hint (the
 // depth just integrated from the same pose, as a SLAM pipeline has it) each ray first searches a narrow bracket
@@ -197,19 +198,22 @@ struct RaycastOptions {
   // tracking raycast turns it off; the colour image is then black.
   bool color = true;
   // The depth image just integrated from this same pose (same size as the camera; metres along the optical axis,
-  // 0 = none), or nullptr. Not owned; must outlive the raycast() call. A ray whose pixel has a hint d > 0 first
-  // searches the bracket [d - w, d + w], w = mu + 2 voxels + 3 sigma_z(d) (hf_raycast_hint_halfwidth in
-  // fusion/kernels/raycast_kernels.h: sigma_z is the Kinect's axial noise at d), starting at d - w; when that
-  // bracket holds no + to - crossing, or the pixel has no hint (0, negative or not finite), the ray marches from
-  // min_depth_m as without a hint. Most rays then take a handful of samples instead of crossing the free space in
-  // front of the surface.
-  //   The semantic difference: without a hint the result is the FIRST + to - crossing along the ray; with one, a
-  // surface more than w in front of the hinted depth is skipped when the bracket holds a crossing. At the pose the
-  // hint was integrated from, that is space the frame has just measured through (carved as free), so only stale
-  // model surface there (or a sliver at a silhouette, where trilinear interpolation spans both sides of a depth
-  // edge) is skipped. Where both find the same crossing they agree to within 0.01 voxel in depth and 0.5 degrees
-  // in normal (the crossing is refined to 0.001 voxel); measured on fused sphere and noisy room scenes, 0.1-0.2 %
-  // of the pixels differ, at silhouettes and on noisy grazing surfaces (tests/fusion/test_raycast.cpp).
+  // 0 = none), or nullptr. Not owned; must outlive the raycast() call. A ray whose pixel has a hint d > 0 searches
+  // the bracket [d - w, d + w], w = mu + 2 voxels + 3 sigma_z(d) (hf_raycast_hint_halfwidth in
+  // fusion/kernels/raycast_kernels.h: sigma_z is the Kinect's axial noise at d), outwards from d: one trilinear
+  // sample at d; in front of the surface (sdf >= 0) the march goes on forward to d + w, behind it (sdf < 0) the
+  // ray walks back towards the camera with the same SDF-bounded steps until the SDF turns positive. When that finds
+  // no + to - crossing (or the walk back meets an unobserved sample), or the pixel has no hint (0, negative or not
+  // finite), the ray marches from min_depth_m as without a hint. Most rays then take three or four samples instead
+  // of crossing the free space in front of the surface.
+  //   The semantic difference: without a hint the result is the FIRST + to - crossing along the ray; with one, it
+  // is the crossing nearest to d on the side the sample at d says (so a surface in front of it within the bracket
+  // is skipped too). At the pose the hint was integrated from, the space in front of d is what the frame has just
+  // measured through (carved as free), so only stale model surface there, a sliver at a silhouette (where
+  // trilinear interpolation spans both sides of a depth edge) or a second crossing of a noisy far surface is
+  // skipped. Where both find the same crossing they agree to within 0.01 voxel in depth and 0.5 degrees in normal
+  // (the crossing is refined to 0.001 voxel); measured on fused sphere and noisy room scenes, 0.1-0.5 % of the
+  // pixels differ, at silhouettes and on noisy far or grazing surfaces (tests/fusion/test_raycast.cpp).
   const DepthImage* depth_hint = nullptr;
   // Throws hf::Error naming the bad field: 0 < min_depth_m < max_depth_m (finite), step_fraction in (0, 1),
   // min_step_vox in (0, 4], min_weight >= 0, refine_tol_vox in (0, 1].
