@@ -289,7 +289,10 @@ IntegrateStats integrate(VoxelBlockGrid& grid, const DepthImage& depth, const Co
           (R_cw * (origin_world + Eigen::Vector3d::Constant(0.5 * voxel_m)) + t_cw).cast<float>();
       for (int a = 0; a < 3; ++a) b.p0[a] = p0[a];
       Voxel* voxels = visible[i].second->voxels.data();
-      n_updated += size_t(simd ? detail::update_block_avx2(voxels, b, frame) : detail::update_block(voxels, b, frame));
+      const int n = simd ? detail::update_block_avx2(voxels, b, frame) : detail::update_block(voxels, b, frame);
+      // The raycast's block skip (VoxelBlockGrid::surface_free): a block this frame changed is summarised again.
+      if (n > 0) grid.set_surface_free(c, block_is_surface_free(*visible[i].second));
+      n_updated += size_t(n);
     }
     updated.local() += n_updated;
     in_view.local() += n_view;

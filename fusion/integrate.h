@@ -13,7 +13,8 @@
 //      block runs the shared per-voxel kernel (fusion/kernels/integrate_kernels.h: projective TSDF, running
 //      average of eq. 57-58, weight cap, colour with the same weights), eight voxels of a block row at a time
 //      with AVX2 where the processor has it (fusion/integrate_cpu.h; same bits as the voxel-by-voxel loop).
-//      Blocks whose corners all project outside the image or behind the camera are skipped.
+//      Blocks whose corners all project outside the image or behind the camera are skipped. Each block the frame
+//      changed gets its VoxelBlockGrid::surface_free flag again (the raycast's block skip).
 //      With IntegrateParams::point_to_plane, a per-pixel pass first computes each pixel's point-to-plane factor
 //      from the depth image (hf_point_to_plane_factor) and the kernel scales the projective distance by it.
 //

@@ -24,16 +24,24 @@ namespace hf::fusion {
 // ---------------------------------------------------------------------------------------------------------------
 // BlockLookup
 
-BlockLookup::BlockLookup(const VoxelBlockGrid& grid) : BlockLookup(grid.blocks_unordered()) {}
+BlockLookup::BlockLookup(const VoxelBlockGrid& grid, bool skippable) {
+  std::vector<std::uint8_t> surface_free;
+  *this = BlockLookup(grid.blocks_unordered(skippable ? &surface_free : nullptr), skippable ? &surface_free : nullptr);
+}
 
-BlockLookup::BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBlock*>>& blocks) {
+BlockLookup::BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBlock*>>& blocks,
+                         const std::vector<std::uint8_t>* surface_free) {
+  if (surface_free != nullptr && surface_free->size() != blocks.size())
+    throw Error("BlockLookup: " + std::to_string(surface_free->size()) + " surface_free flags for " +
+                std::to_string(blocks.size()) + " blocks");
   size_ = blocks.size();
   // Load factor <= 0.5 keeps linear probes short.
   const size_t n = std::bit_ceil(std::max<size_t>(16, 2 * blocks.size()));
   slots_.assign(n, Slot{});
   mask_ = n - 1;
   shift_ = 64 - std::countr_zero(n);
-  for (const auto& [c, block] : blocks) {
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    const auto& [c, block] = blocks[b];
     if (block == nullptr) throw Error("BlockLookup: null block pointer");
     size_t i = slot_of(c.x, c.y, c.z);
     while (slots_[i].block != nullptr && !(slots_[i].x == c.x && slots_[i].y == c.y && slots_[i].z == c.z))
@@ -42,7 +50,7 @@ BlockLookup::BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBloc
       --size_;  // the same coordinate twice: the first one wins
       continue;
     }
-    slots_[i] = Slot{c.x, c.y, c.z, block};
+    slots_[i] = Slot{c.x, c.y, c.z, surface_free != nullptr && (*surface_free)[b] != 0, block};
   }
   // Regions: at most as many as blocks, usually far fewer; a table 2^extra times smaller than slots_ takes the
   // same hash's top bits. The distinct regions are found by inserting every block's region into a scratch table
@@ -52,7 +60,7 @@ BlockLookup::BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBloc
   size_t distinct = 0;
   for (const Slot& s : slots_) {
     if (s.block == nullptr) continue;
-    const Slot r{s.x >> kRegionShift, s.y >> kRegionShift, s.z >> kRegionShift, s.block};
+    const Slot r{s.x >> kRegionShift, s.y >> kRegionShift, s.z >> kRegionShift, false, s.block};
     size_t i = slot_of(r.x, r.y, r.z);
     while (scratch[i].block != nullptr && !(scratch[i].x == r.x && scratch[i].y == r.y && scratch[i].z == r.z))
       i = (i + 1) & mask_;
@@ -558,6 +566,19 @@ bool march(VolumeSampler& sampler, const MarchParams& m, const Eigen::Vector3f& 
                               d_vox.y() != 0.0f ? 1.0f / d_vox.y() : std::numeric_limits<float>::infinity(),
                               d_vox.z() != 0.0f ? 1.0f / d_vox.z() : std::numeric_limits<float>::infinity());
   const float skip_eps = 1e-3f * voxel_m;
+  // Where the ray leaves the cube of 2^shift voxels (aligned to multiples of it) that holds voxel (i, j, k).
+  auto exit_of = [&](int i, int j, int k, int shift) {
+    const float size = float(1 << shift);
+    const float lo[3] = {float(i >> shift) * size - 0.5f, float(j >> shift) * size - 0.5f,
+                         float(k >> shift) * size - 0.5f};
+    float t_exit = std::numeric_limits<float>::infinity();
+    for (int a = 0; a < 3; ++a) {
+      if (d_vox[a] == 0.0f) continue;
+      const float plane = d_vox[a] > 0.0f ? lo[a] + size : lo[a];
+      t_exit = std::min(t_exit, (plane - o_vox[a]) * inv_d[a]);
+    }
+    return t_exit;
+  };
   float t = t_min;
   bool have_prev = false;    // a sample with sdf > 0 precedes t
   bool prev_exact = false;   // ... and it was trilinear (else the nearest voxel's value)
@@ -569,23 +590,23 @@ bool march(VolumeSampler& sampler, const MarchParams& m, const Eigen::Vector3f& 
     float unused[3];
     if (!floor3(p.x() + 0.5f, p.y() + 0.5f, p.z() + 0.5f, 1e8f, ijk, unused)) return false;
     const int i = ijk[0], j = ijk[1], k = ijk[2];
-    const VoxelBlock* block = sampler.block(i >> 3, j >> 3, k >> 3);
+    bool skippable = false;
+    const VoxelBlock* block = sampler.block(i >> 3, j >> 3, k >> 3, &skippable);
     if (block == nullptr) {
       // Jump to where the ray leaves this block, or its whole region when that holds no block at all.
       constexpr int kRegionShift = BlockLookup::kRegionShift + 3;  // region size in voxels, log2
       const bool region_empty = !sampler.region_occupied(i >> kRegionShift, j >> kRegionShift, k >> kRegionShift);
-      const int shift = region_empty ? kRegionShift : 3;
-      const float size = float(1 << shift);
-      float t_exit = std::numeric_limits<float>::infinity();
-      const float lo[3] = {float(i >> shift) * size - 0.5f, float(j >> shift) * size - 0.5f,
-                           float(k >> shift) * size - 0.5f};
-      for (int a = 0; a < 3; ++a) {
-        if (d_vox[a] == 0.0f) continue;
-        const float plane = d_vox[a] > 0.0f ? lo[a] + size : lo[a];
-        t_exit = std::min(t_exit, (plane - o_vox[a]) * inv_d[a]);
-      }
-      t = std::max(t_exit, t) + skip_eps;
+      t = std::max(exit_of(i, j, k, region_empty ? kRegionShift : 3), t) + skip_eps;
       have_prev = false;
+      continue;
+    }
+    if (skippable && t > fine_until) {
+      // No surface inside this block (VoxelBlockGrid::surface_free): one long cheap step to where the ray leaves
+      // it. A crossing in the half voxel along its faces (cells shared with the next block) shows as a negative
+      // sample right after, which sends the ray back here to walk the block with trilinear samples.
+      have_prev = true, prev_exact = false;
+      t_prev = t, s_prev = 1.0f;
+      t = std::max(exit_of(i, j, k, 3), t) + skip_eps;
       continue;
     }
     const Voxel& nearest = block->voxels[hf_voxel_index(i & 7, j & 7, k & 7)];
@@ -672,8 +693,9 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
     out->shaded = ColorImage();
 
   // One snapshot of the blocks for the look-up table and the range image; neither depends on their order.
-  const auto blocks = grid.blocks_unordered();
-  const BlockLookup lookup(blocks);
+  std::vector<std::uint8_t> surface_free;
+  const auto blocks = grid.blocks_unordered(options.skip_blocks ? &surface_free : nullptr);
+  const BlockLookup lookup(blocks, options.skip_blocks ? &surface_free : nullptr);
   const double voxel_m = grid.params().voxel_m;
   const float mu_m = float(grid.params().truncation_m());
   const Eigen::Matrix3f R = T_world_camera.rotation().cast<float>();

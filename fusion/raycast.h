@@ -7,7 +7,8 @@
 // 8 x 8 pixel tile sees (InfiniTAM's range image; blocks are clipped against the near plane before they are
 // projected). Where the block containing the ray point does not exist the ray jumps to where it leaves that block,
 // or the whole 4 x 4 x 4-block region when that holds no block (free and unseen space are never stepped through
-// voxel by voxel). Inside allocated blocks, where the nearest voxel is far in front of the surface (sdf > 0.5) the
+// voxel by voxel); an allocated block without surface (no observed voxel with sdf <= 0:
+// VoxelBlockGrid::surface_free) is crossed in one step too. Inside allocated blocks, where the nearest voxel is far in front of the surface (sdf > 0.5) the
 // ray advances by step_fraction of the distance bound sdf * mu - sqrt(3)/2 voxel without interpolating; nearer
 // the surface it takes steps of step_fraction * sdf * mu (at least min_step_vox voxels), sampling the trilinearly
 // interpolated SDF. The first sign change from + to - is the surface (a change from - to +, seen when a
@@ -49,16 +50,28 @@ namespace hf::fusion {
 class BlockLookup {
  public:
   BlockLookup() = default;
-  explicit BlockLookup(const VoxelBlockGrid& grid);
-  explicit BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBlock*>>& blocks);
+  // With the grid's surface_free flags (VoxelBlockGrid::surface_free) when skippable is true.
+  explicit BlockLookup(const VoxelBlockGrid& grid, bool skippable = true);
+  // surface_free: one flag per block (same order), or nullptr (no block is skippable).
+  explicit BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBlock*>>& blocks,
+                       const std::vector<std::uint8_t>* surface_free = nullptr);
 
   const VoxelBlock* find(int bx, int by, int bz) const {
+    bool unused;
+    return find(bx, by, bz, &unused);
+  }
+  // Also whether a raycast may skip the block (its surface_free flag; false for a missing block).
+  const VoxelBlock* find(int bx, int by, int bz, bool* skippable) const {
+    *skippable = false;
     if (slots_.empty()) return nullptr;
     size_t i = slot_of(bx, by, bz);
     for (;;) {
       const Slot& s = slots_[i];
       if (s.block == nullptr) return nullptr;
-      if (s.x == bx && s.y == by && s.z == bz) return s.block;
+      if (s.x == bx && s.y == by && s.z == bz) {
+        *skippable = s.skippable;
+        return s.block;
+      }
       i = (i + 1) & mask_;
     }
   }
@@ -90,6 +103,7 @@ class BlockLookup {
   }
   struct Slot {
     int x = 0, y = 0, z = 0;
+    bool skippable = false;  // in what was padding
     const VoxelBlock* block = nullptr;
   };
   std::vector<Slot> slots_;
@@ -120,11 +134,17 @@ class VolumeSampler {
   // coordinates, so the up to 8 blocks of any 2 x 2 x 2 neighbourhood (a trilinear sample or a gradient across a
   // block border) stay cached together.
   const VoxelBlock* block(int bx, int by, int bz) {
+    bool unused;
+    return block(bx, by, bz, &unused);
+  }
+  // The same, and whether a raycast may skip it (BlockLookup::find).
+  const VoxelBlock* block(int bx, int by, int bz, bool* skippable) {
     CacheEntry& e = cache_[(bx & 1) | ((by & 1) << 1) | ((bz & 1) << 2)];
     if (bx != e.x || by != e.y || bz != e.z) {
-      e.block = lookup_->find(bx, by, bz);
+      e.block = lookup_->find(bx, by, bz, &e.skippable);
       e.x = bx, e.y = by, e.z = bz;
     }
+    *skippable = e.skippable;
     return e.block;
   }
   // BlockLookup::region_occupied with the last region cached.
@@ -172,6 +192,7 @@ class VolumeSampler {
   std::uint16_t min_weight_raw_;  // >= 1: weight 0 (never observed) is always unobserved
   struct CacheEntry {
     int x = -2147483647 - 1, y = 0, z = 0;  // nothing cached yet (block x never reaches INT_MIN)
+    bool skippable = false;
     const VoxelBlock* block = nullptr;
   };
   CacheEntry cache_[8];
@@ -197,6 +218,10 @@ struct RaycastOptions {
   // model's colour (photometric rows align frame to frame, registration/photometric.h), so the SLAM pipeline's
   // tracking raycast turns it off; the colour image is then black.
   bool color = true;
+  // Skip whole blocks with no surface inside (VoxelBlockGrid::surface_free, kept by integrate()) in one step
+  // instead of crossing them voxel by voxel. Turning it off changes only the cost (tests/fusion/test_raycast.cpp
+  // holds the two to the same hits); it is here for that comparison.
+  bool skip_blocks = true;
   // The depth image just integrated from this same pose (same size as the camera; metres along the optical axis,
   // 0 = none), or nullptr. Not owned; must outlive the raycast() call. A ray whose pixel has a hint d > 0 searches
   // the bracket [d - w, d + w], w = mu + 2 voxels + 3 sigma_z(d) (hf_raycast_hint_halfwidth in

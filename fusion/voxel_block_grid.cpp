@@ -38,13 +38,18 @@ void VolumeParams::validate() const {
 // The pool is a fixed table of chunk pointers (sized from the capacity) so a slot's address never moves and
 // readers need no lock to turn a slot into a block pointer; chunks are allocated on first use.
 struct VoxelBlockGrid::Impl {
-  explicit Impl(size_t capacity) : chunks((capacity + kChunkBlocks - 1) / kChunkBlocks) {}
+  explicit Impl(size_t capacity)
+      : chunks((capacity + kChunkBlocks - 1) / kChunkBlocks), surface_free(chunks.size()) {}
 
   VoxelBlock* slot_block(std::uint32_t slot) const { return &chunks[slot / kChunkBlocks][slot % kChunkBlocks]; }
+  std::uint8_t& slot_surface_free(std::uint32_t slot) const {
+    return surface_free[slot / kChunkBlocks][slot % kChunkBlocks];
+  }
 
   mutable std::shared_mutex mutex;
   std::unordered_map<BlockCoord, std::uint32_t, BlockCoordHash> table;
   std::vector<std::unique_ptr<VoxelBlock[]>> chunks;
+  std::vector<std::unique_ptr<std::uint8_t[]>> surface_free;  // per slot, beside chunks (see surface_free())
   std::vector<std::uint32_t> free_slots;
   std::uint32_t next_slot = 0;  // slots below this have been handed out at least once
 };
@@ -86,7 +91,10 @@ VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c, bool* created) {
   } else if (impl_->next_slot < params_.capacity_blocks) {
     slot = impl_->next_slot++;
     auto& chunk = impl_->chunks[slot / kChunkBlocks];
-    if (!chunk) chunk = std::make_unique<VoxelBlock[]>(kChunkBlocks);  // value-initialised: all voxels zero
+    if (!chunk) {
+      chunk = std::make_unique<VoxelBlock[]>(kChunkBlocks);  // value-initialised: all voxels zero
+      impl_->surface_free[slot / kChunkBlocks] = std::make_unique<std::uint8_t[]>(kChunkBlocks);
+    }
   } else {
     std::ostringstream msg;
     msg << "voxel block pool full: capacity " << params_.capacity_blocks << " blocks ("
@@ -97,6 +105,7 @@ VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c, bool* created) {
   }
   VoxelBlock* block = impl_->slot_block(slot);
   block->voxels.fill(Voxel{});
+  impl_->slot_surface_free(slot) = 0;
   impl_->table.emplace(c, slot);
   if (created) *created = true;
   return block;
@@ -157,12 +166,39 @@ std::vector<std::pair<BlockCoord, const VoxelBlock*>> VoxelBlockGrid::blocks() c
   return {mutable_blocks.begin(), mutable_blocks.end()};
 }
 
-std::vector<std::pair<BlockCoord, const VoxelBlock*>> VoxelBlockGrid::blocks_unordered() const {
+std::vector<std::pair<BlockCoord, const VoxelBlock*>> VoxelBlockGrid::blocks_unordered(
+    std::vector<std::uint8_t>* surface_free) const {
   std::vector<std::pair<BlockCoord, const VoxelBlock*>> out;
   std::shared_lock lock(impl_->mutex);
   out.reserve(impl_->table.size());
-  for (const auto& [c, slot] : impl_->table) out.emplace_back(c, impl_->slot_block(slot));
+  if (surface_free != nullptr) {
+    surface_free->clear();
+    surface_free->reserve(impl_->table.size());
+  }
+  for (const auto& [c, slot] : impl_->table) {
+    out.emplace_back(c, impl_->slot_block(slot));
+    if (surface_free != nullptr) surface_free->push_back(impl_->slot_surface_free(slot));
+  }
   return out;
+}
+
+void VoxelBlockGrid::set_surface_free(const BlockCoord& c, bool surface_free) {
+  std::shared_lock lock(impl_->mutex);
+  auto it = impl_->table.find(c);
+  if (it != impl_->table.end()) impl_->slot_surface_free(it->second) = surface_free ? 1 : 0;
+}
+
+bool VoxelBlockGrid::surface_free(const BlockCoord& c) const {
+  std::shared_lock lock(impl_->mutex);
+  auto it = impl_->table.find(c);
+  return it != impl_->table.end() && impl_->slot_surface_free(it->second) != 0;
+}
+
+bool block_is_surface_free(const VoxelBlock& block) {
+  // Branch-free over all 512 voxels (vectorised): observed (weight > 0) and sdf <= 0 anywhere makes it false.
+  unsigned surface = 0;
+  for (const Voxel& v : block.voxels) surface |= unsigned(v.weight != 0) & unsigned(v.sdf <= 0);
+  return surface == 0;
 }
 
 void VoxelBlockGrid::for_each_block(const std::function<void(const BlockCoord&, const VoxelBlock&)>& f) const {

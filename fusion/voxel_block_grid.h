@@ -108,7 +108,20 @@ class VoxelBlockGrid {
   std::vector<std::pair<BlockCoord, const VoxelBlock*>> blocks() const;
   // The same in the hash table's order, without the sort (a 20 k-block map spent ~2 % of the SLAM pipeline's time
   // sorting for each raycast): only for passes whose result does not depend on the order (look-up tables, bounds).
-  std::vector<std::pair<BlockCoord, const VoxelBlock*>> blocks_unordered() const;
+  // With surface_free, also each block's surface_free() flag (same order).
+  std::vector<std::pair<BlockCoord, const VoxelBlock*>> blocks_unordered(
+      std::vector<std::uint8_t>* surface_free = nullptr) const;
+
+  // Per block, a flag a raycast may skip the block by: true only when no observed voxel of it (weight > 0) has
+  // sdf <= 0, so every trilinear sample whose eight corners lie in the block is positive or unobserved and no
+  // surface crosses its interior (fusion/raycast.h). integrate() sets it for every block it updates
+  // (block_is_surface_free of the result); allocate() starts every block at false (never skip), which stays
+  // correct whatever is written into it. Code that writes voxels of a block integrate() has flagged must clear the
+  // flag (set_surface_free(c, false)) or set it from block_is_surface_free. Setting the flag of a missing block
+  // does nothing; a missing block reads false. Thread-safe like voxel writes: distinct blocks from distinct
+  // threads, not concurrently with readers of the same block's flag.
+  void set_surface_free(const BlockCoord& c, bool surface_free);
+  bool surface_free(const BlockCoord& c) const;
 
   // World point -> block containing it; world point -> continuous voxel coordinates (voxel centres at integers).
   BlockCoord block_of(const Eigen::Vector3d& p_world) const;
@@ -122,5 +135,8 @@ class VoxelBlockGrid {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// What VoxelBlockGrid::set_surface_free wants to know of a block: no voxel is observed with sdf <= 0.
+bool block_is_surface_free(const VoxelBlock& block);
 
 }  // namespace hf::fusion

@@ -445,6 +445,33 @@ TEST(Integrate, ErrorsAndDeterminism) {
   EXPECT_EQ(bytes[0], bytes[1]);
 }
 
+// integrate() keeps every block's surface_free flag (the raycast's block skip) equal to what its voxels say:
+// exact for every block with an observed voxel, false (never skip) for blocks no frame has observed yet. Over a
+// noisy sequence both kinds of flag occur.
+TEST(Integrate, SurfaceFreeFlagsMatchTheVoxels) {
+  datasets::SyntheticOptions options;
+  options.preset = "room";
+  options.frames = 12;
+  options.camera = small_camera();
+  const datasets::SyntheticSequence seq(options);
+  VoxelBlockGrid grid(params_1cm());
+  size_t free_blocks = 0, surface_blocks = 0;
+  for (int f = 0; f < seq.size(); f += 3) {
+    const auto frame = seq.frame(f);
+    integrate(grid, frame.depth, frame.color, seq.camera(), frame.T_world_camera);
+    for (const auto& [c, block] : grid.blocks()) {
+      bool observed = false;
+      for (const Voxel& v : block->voxels) observed |= v.weight > 0;
+      const bool expected = observed && block_is_surface_free(*block);
+      ASSERT_EQ(grid.surface_free(c), expected) << "frame " << f << ", block " << c.x << " " << c.y << " " << c.z;
+      free_blocks += expected ? 1 : 0;
+      surface_blocks += expected ? 0 : 1;
+    }
+  }
+  EXPECT_GT(free_blocks, 100u);
+  EXPECT_GT(surface_blocks, 100u);
+}
+
 // integrate()'s update loop (projections of a block row first, then the updates) must give exactly what the
 // shared per-voxel kernel hf_integrate_voxel gives voxel by voxel (the OpenCL path will run the latter), with the
 // voxel centres stepped through the block the same way.

@@ -199,6 +199,46 @@ TEST(VoxelBlockGrid, IterationIsSortedAndComplete) {
   }
 }
 
+// block_is_surface_free: false exactly when an observed voxel (weight > 0) has sdf <= 0; unobserved voxels do
+// not count whatever they hold.
+TEST(VoxelBlockGrid, BlockIsSurfaceFreeLooksAtObservedVoxelsOnly) {
+  VoxelBlock b{};
+  EXPECT_TRUE(block_is_surface_free(b));  // never observed
+  for (auto& v : b.voxels) v = Voxel{hf_int16(100), hf_uint16(16), 0, 0, 0, 0};
+  EXPECT_TRUE(block_is_surface_free(b));  // all in front of a surface
+  b.voxels[511].sdf = -32767;
+  b.voxels[511].weight = 0;
+  EXPECT_TRUE(block_is_surface_free(b));  // negative but unobserved
+  b.voxels[511].weight = 1;
+  EXPECT_FALSE(block_is_surface_free(b));  // the last voxel counts
+  b.voxels[511] = Voxel{hf_int16(100), hf_uint16(16), 0, 0, 0, 0};
+  b.voxels[0].sdf = 0;
+  EXPECT_FALSE(block_is_surface_free(b));  // zero is on the surface
+}
+
+// The per-block flag: false when allocated (also for a slot reused after release), set and read per coordinate,
+// reported by blocks_unordered in its order; a missing block reads false and setting it does nothing.
+TEST(VoxelBlockGrid, SurfaceFreeFlagFollowsTheBlock) {
+  VoxelBlockGrid grid(small_params());
+  const BlockCoord a{0, 0, 0}, b{1, 2, 3}, missing{9, 9, 9};
+  grid.allocate(a);
+  grid.allocate(b);
+  EXPECT_FALSE(grid.surface_free(a));
+  grid.set_surface_free(b, true);
+  EXPECT_TRUE(grid.surface_free(b));
+  EXPECT_FALSE(grid.surface_free(a));
+  grid.set_surface_free(missing, true);
+  EXPECT_FALSE(grid.surface_free(missing));
+  EXPECT_EQ(grid.find(missing), nullptr);
+  std::vector<std::uint8_t> flags;
+  const auto blocks = grid.blocks_unordered(&flags);
+  ASSERT_EQ(flags.size(), blocks.size());
+  for (size_t i = 0; i < blocks.size(); ++i) EXPECT_EQ(flags[i] != 0, blocks[i].first == b);
+  ASSERT_TRUE(grid.release(b));
+  grid.allocate(b);  // reuses the freed slot
+  EXPECT_FALSE(grid.surface_free(b));
+}
+
 TEST(GarbageCollect, ReleasesUnobservedAndFreeSpaceBlocksOnly) {
   VoxelBlockGrid grid(small_params());
   grid.allocate({0, 0, 0});  // never observed
