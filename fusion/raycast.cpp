@@ -676,6 +676,68 @@ bool march_from_hint(VolumeSampler& sampler, const MarchParams& m, const Eigen::
 
 }  // namespace
 
+namespace {
+
+// The slab of the view frustum between the depths near and far, its sides through u = -1, u = W, v = -1, v = H
+// (one pixel of slack around the pixel centres every ray passes through), for rejecting spheres wholly outside.
+class ViewSlab {
+ public:
+  ViewSlab(const PinholeCamera& camera, double near_m, double far_m)
+      : near_(near_m),
+        far_(far_m),
+        left_(side((-1.0 - camera.cx) / camera.fx)),
+        right_(side((camera.width - camera.cx) / camera.fx)),
+        top_(side((-1.0 - camera.cy) / camera.fy)),
+        bottom_(side((camera.height - camera.cy) / camera.fy)) {}
+  // True when the ball of this radius around the camera-frame point c lies wholly outside one of the six planes.
+  bool ball_outside(const Eigen::Vector3d& c, double radius) const {
+    return c.z() + radius < near_ || c.z() - radius > far_ || left_.distance(c.x(), c.z()) < -radius ||
+           right_.distance(c.x(), c.z()) > radius || top_.distance(c.y(), c.z()) < -radius ||
+           bottom_.distance(c.y(), c.z()) > radius;
+  }
+
+ private:
+  // Signed distance of a camera-frame point (x or y, z) from the side plane {x = a z} (or y), positive on the side
+  // of larger x: (x - a z) / sqrt(1 + a^2).
+  struct Side {
+    double a, inv_norm;
+    double distance(double xy, double z) const { return (xy - a * z) * inv_norm; }
+  };
+  static Side side(double a) { return Side{a, 1.0 / std::sqrt(1.0 + a * a)}; }
+  double near_, far_;
+  Side left_, right_, top_, bottom_;
+};
+
+// The centre of block c in the camera frame.
+Eigen::Vector3d block_centre_camera(const BlockCoord& c, double block_m, const SE3& T_camera_world) {
+  return T_camera_world * ((Eigen::Vector3d(c.x, c.y, c.z) + Eigen::Vector3d::Constant(0.5)) * block_m);
+}
+
+}  // namespace
+
+std::vector<std::pair<BlockCoord, const VoxelBlock*>> blocks_in_view(const VoxelBlockGrid& grid,
+                                                                     const PinholeCamera& camera,
+                                                                     const SE3& T_world_camera,
+                                                                     const RaycastOptions& options,
+                                                                     std::vector<std::uint8_t>* surface_free) {
+  std::vector<std::uint8_t> all_flags;
+  const auto all = grid.blocks_unordered(surface_free != nullptr ? &all_flags : nullptr);
+  const ViewSlab slab(camera, options.min_depth_m, options.max_depth_m);
+  const SE3 T_camera_world = T_world_camera.inverse();
+  const double B = grid.params().block_m();
+  // Every voxel centre of a block lies within its bounding sphere (the cube's, 0.866 B); every voxel a sample reads
+  // lies within kRaycastReachVox voxels of a point of the slab.
+  const double radius = 0.8660254037844386 * B + kRaycastReachVox * grid.params().voxel_m;
+  std::vector<std::pair<BlockCoord, const VoxelBlock*>> out;
+  if (surface_free != nullptr) surface_free->clear();
+  for (size_t i = 0; i < all.size(); ++i) {
+    if (slab.ball_outside(block_centre_camera(all[i].first, B, T_camera_world), radius)) continue;
+    out.push_back(all[i]);
+    if (surface_free != nullptr) surface_free->push_back(all_flags[i]);
+  }
+  return out;
+}
+
 void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
              const RaycastOptions& options, RaycastResult* out) {
   options.validate(camera);
@@ -692,9 +754,11 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
   else
     out->shaded = ColorImage();
 
-  // One snapshot of the blocks for the look-up table and the range image; neither depends on their order.
+  // The blocks the rays can read, for the look-up table and the range image (neither depends on their order): the
+  // map outgrows the view on every real sequence, and both cost per block.
   std::vector<std::uint8_t> surface_free;
-  const auto blocks = grid.blocks_unordered(options.skip_blocks ? &surface_free : nullptr);
+  const auto blocks =
+      blocks_in_view(grid, camera, T_world_camera, options, options.skip_blocks ? &surface_free : nullptr);
   const BlockLookup lookup(blocks, options.skip_blocks ? &surface_free : nullptr);
   const double voxel_m = grid.params().voxel_m;
   const float mu_m = float(grid.params().truncation_m());
@@ -719,29 +783,16 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
     const Eigen::Vector3d tcw = T_camera_world.translation();
     const double B = grid.params().block_m(), near_m = options.min_depth_m, far_m = options.max_depth_m;
     const Eigen::Vector3d ex = Rcw.col(0) * B, ey = Rcw.col(1) * B, ez = Rcw.col(2) * B;
-    // Most blocks of a map lie outside the view. A block whose bounding sphere is wholly beyond the near or far
-    // plane, or beyond a side plane of the slack-widened image (u = -1, u = W, v = -1, v = H, the bounds tested
-    // below), has every corner and near-plane crossing there too, so the exact test below would drop it as well:
-    // dropping it first changes no tile, only the cost (the map outgrows the view on every real sequence).
+    // A block whose bounding sphere is wholly beyond the near or far plane, or beyond a side plane of the
+    // slack-widened image (the bounds tested below), has every corner and near-plane crossing there too, so the
+    // exact test below would drop it as well: dropping it first changes no tile, only the cost.
     const double radius = 0.8660254037844386 * B;
-    // Signed distance of a camera-frame point (x or y, z) from the side plane {x = a z} (or y), positive on the
-    // side of larger x: (x - a z) / sqrt(1 + a^2).
-    struct Side {
-      double a, inv_norm;
-      double distance(double xy, double z) const { return (xy - a * z) * inv_norm; }
-    };
-    auto side = [](double a) { return Side{a, 1.0 / std::sqrt(1.0 + a * a)}; };
-    const Side left = side((-1.0 - camera.cx) / camera.fx), right = side((W - camera.cx) / camera.fx);
-    const Side top = side((-1.0 - camera.cy) / camera.fy), bottom = side((H - camera.cy) / camera.fy);
+    const ViewSlab slab(camera, near_m, far_m);
     for (const auto& [c, block] : blocks) {
       (void)block;
       Eigen::Vector3d p[8];
       const Eigen::Vector3d p0 = Rcw * (Eigen::Vector3d(c.x, c.y, c.z) * B) + tcw;
-      const Eigen::Vector3d centre = p0 + 0.5 * (ex + ey + ez);
-      if (centre.z() + radius < near_m || centre.z() - radius > far_m) continue;
-      if (left.distance(centre.x(), centre.z()) < -radius || right.distance(centre.x(), centre.z()) > radius ||
-          top.distance(centre.y(), centre.z()) < -radius || bottom.distance(centre.y(), centre.z()) > radius)
-        continue;
+      if (slab.ball_outside(p0 + 0.5 * (ex + ey + ez), radius)) continue;
       double zmin = std::numeric_limits<double>::infinity(), zmax = -zmin;
       for (int k = 0; k < 8; ++k) {
         p[k] = p0 + double(k & 1) * ex + double((k >> 1) & 1) * ey + double(k >> 2) * ez;

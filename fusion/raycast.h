@@ -256,6 +256,21 @@ struct RaycastResult {
   int hit_count = 0;     // pixels with a surface
 };
 
+// How far from a point of a ray raycast() reads voxels, in voxels: a trilinear sample's corners and the 4 x 4 x 4
+// neighbourhood of its normal lie within 2 voxels per axis of the sample (2 sqrt(3) = 3.46 voxels).
+constexpr double kRaycastReachVox = 3.5;
+
+// The blocks a raycast() from T_world_camera with these options may read, in the grid's hash order: every block
+// whose bounding sphere comes within kRaycastReachVox voxels of the view frustum between min_depth_m and
+// max_depth_m (its sides one pixel outside the image). raycast() builds its look-up table and range image from
+// these only, so per frame it costs one sphere test per block of the map and otherwise scales with the view, not
+// the map. With surface_free, also their VoxelBlockGrid::surface_free flags (same order).
+std::vector<std::pair<BlockCoord, const VoxelBlock*>> blocks_in_view(const VoxelBlockGrid& grid,
+                                                                     const PinholeCamera& camera,
+                                                                     const SE3& T_world_camera,
+                                                                     const RaycastOptions& options,
+                                                                     std::vector<std::uint8_t>* surface_free = nullptr);
+
 // Throws hf::Error for invalid options or a camera with non-positive size or focal length.
 RaycastResult raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
                       const RaycastOptions& options = {});
