@@ -1,11 +1,16 @@
 #include "fusion/voxel_block_grid.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <cmath>
 #include <mutex>
 #include <shared_mutex>
 #include <sstream>
 #include <unordered_map>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace hf::fusion {
 
@@ -195,10 +200,28 @@ bool VoxelBlockGrid::surface_free(const BlockCoord& c) const {
 }
 
 bool block_is_surface_free(const VoxelBlock& block) {
-  // Branch-free over all 512 voxels (vectorised): observed (weight > 0) and sdf <= 0 anywhere makes it false.
+  // integrate() asks this of every block it updates, so it must cost far less than the update: branch-free over
+  // the 512 voxels. A voxel's low 32 bits are sdf | weight << 16 (little-endian, fusion/kernels/voxel.h); it is on
+  // or behind a surface when the word's high half (weight) is not 0 and its low half, as int16, is <= 0.
+  static_assert(offsetof(Voxel, sdf) == 0 && offsetof(Voxel, weight) == 2 && sizeof(Voxel) == 8, "voxel layout");
+#if defined(__SSE2__)
+  const __m128i one = _mm_set1_epi32(1), zero = _mm_setzero_si128();
+  __m128i surface = _mm_setzero_si128();
+  const auto* p = reinterpret_cast<const __m128i*>(block.voxels.data());
+  for (int i = 0; i < HF_VOXELS_PER_BLOCK / 2; i += 2) {
+    // Two loads of two voxels each; their low words (lanes 0 and 2) side by side.
+    const __m128i a = _mm_loadu_si128(p + i), b = _mm_loadu_si128(p + i + 1);
+    const __m128i w = _mm_castps_si128(_mm_shuffle_ps(_mm_castsi128_ps(a), _mm_castsi128_ps(b), _MM_SHUFFLE(2, 0, 2, 0)));
+    const __m128i sdf = _mm_srai_epi32(_mm_slli_epi32(w, 16), 16);
+    const __m128i unobserved = _mm_cmpeq_epi32(_mm_srli_epi32(w, 16), zero);  // weight 0 (unsigned: any weight)
+    surface = _mm_or_si128(surface, _mm_andnot_si128(unobserved, _mm_cmplt_epi32(sdf, one)));
+  }
+  return _mm_movemask_epi8(surface) == 0;
+#else
   unsigned surface = 0;
   for (const Voxel& v : block.voxels) surface |= unsigned(v.weight != 0) & unsigned(v.sdf <= 0);
   return surface == 0;
+#endif
 }
 
 void VoxelBlockGrid::for_each_block(const std::function<void(const BlockCoord&, const VoxelBlock&)>& f) const {

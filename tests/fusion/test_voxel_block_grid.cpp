@@ -214,6 +214,14 @@ TEST(VoxelBlockGrid, BlockIsSurfaceFreeLooksAtObservedVoxelsOnly) {
   b.voxels[511] = Voxel{hf_int16(100), hf_uint16(16), 0, 0, 0, 0};
   b.voxels[0].sdf = 0;
   EXPECT_FALSE(block_is_surface_free(b));  // zero is on the surface
+  b.voxels[0].sdf = 1;
+  EXPECT_TRUE(block_is_surface_free(b));
+  for (const std::uint16_t w : {std::uint16_t(0x8000), std::uint16_t(0xFFFF)}) {  // weights with the top bit set
+    b.voxels[200] = Voxel{hf_int16(-5), w, 0, 0, 0, 0};
+    EXPECT_FALSE(block_is_surface_free(b)) << w;
+  }
+  b.voxels[200] = Voxel{hf_int16(5), hf_uint16(0xFFFF), 255, 255, 255, 255};  // colour bits do not count
+  EXPECT_TRUE(block_is_surface_free(b));
 }
 
 // The per-block flag: false when allocated (also for a slot reused after release), set and read per coordinate,
