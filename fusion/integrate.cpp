@@ -223,10 +223,14 @@ IntegrateStats integrate(VoxelBlockGrid& grid, const DepthImage& depth, const Co
   const std::vector<BlockCoord> touched = blocks_touched_by(volume, depth, camera, T_world_camera, params,
                                                             &stats.pixels_used);
   std::vector<std::pair<BlockCoord, VoxelBlock*>> visible;
+  std::vector<std::uint8_t*> surface_free;  // each visible block's flag (VoxelBlockGrid::surface_free)
   visible.reserve(touched.size());
+  surface_free.reserve(touched.size());
   for (const BlockCoord& c : touched) {
     bool created = false;
-    VoxelBlock* block = grid.allocate(c, &created);
+    std::uint8_t* flag = nullptr;
+    VoxelBlock* block = grid.allocate(c, &created, &flag);
+    surface_free.push_back(flag);
     if (created) {
       ++stats.blocks_allocated;
       if (store && store->take(c, block)) ++stats.blocks_streamed_in;
@@ -289,9 +293,19 @@ IntegrateStats integrate(VoxelBlockGrid& grid, const DepthImage& depth, const Co
           (R_cw * (origin_world + Eigen::Vector3d::Constant(0.5 * voxel_m)) + t_cw).cast<float>();
       for (int a = 0; a < 3; ++a) b.p0[a] = p0[a];
       Voxel* voxels = visible[i].second->voxels.data();
-      const int n = simd ? detail::update_block_avx2(voxels, b, frame) : detail::update_block(voxels, b, frame);
-      // The raycast's block skip (VoxelBlockGrid::surface_free): a block this frame changed is summarised again.
-      if (n > 0) grid.set_surface_free(c, block_is_surface_free(*visible[i].second));
+      bool wrote_surface = false;
+      const int n = simd ? detail::update_block_avx2(voxels, b, frame, &wrote_surface)
+                         : detail::update_block(voxels, b, frame, &wrote_surface);
+      // The raycast's block skip (VoxelBlockGrid::surface_free) for a block this frame changed: a voxel written on
+      // or behind a surface clears it; a block that was free and got only values in front of a surface stays free;
+      // otherwise (this frame may have carved the block's last surface voxel away) the block is scanned.
+      if (n > 0) {
+        std::uint8_t& flag = *surface_free[i];
+        if (wrote_surface)
+          flag = 0;
+        else if (flag == 0)
+          flag = block_is_surface_free(*visible[i].second) ? 1 : 0;
+      }
       n_updated += size_t(n);
     }
     updated.local() += n_updated;

@@ -48,8 +48,9 @@ void band_row(const float* depth, int width, const double* ray_x, double ray_y, 
   }
 }
 
-int update_block(Voxel* voxels, const BlockFrame& b, const FrameInputs& in) {
+int update_block(Voxel* voxels, const BlockFrame& b, const FrameInputs& in, bool* wrote_surface) {
   int updated = 0;
+  bool surface = false;
   for (int z = 0; z < HF_BLOCK_SIZE; ++z) {
     for (int y = 0; y < HF_BLOCK_SIZE; ++y) {
       float p[3];
@@ -65,12 +66,15 @@ int update_block(Voxel* voxels, const BlockFrame& b, const FrameInputs& in) {
       for (int x = 0; x < HF_BLOCK_SIZE; ++x) pixel[x] = hf_voxel_pixel(px[x], py[x], pz[x], in.K);
       Voxel* row = voxels + hf_voxel_index(0, y, z);
       for (int x = 0; x < HF_BLOCK_SIZE; ++x) {
-        if (pixel[x] >= 0)
-          updated += hf_integrate_voxel_at(row + x, pz[x], pixel[x], in.depth, in.incidence, in.rgb, in.mu,
-                                           in.max_weight, in.w);
+        if (pixel[x] >= 0 && hf_integrate_voxel_at(row + x, pz[x], pixel[x], in.depth, in.incidence, in.rgb, in.mu,
+                                                   in.max_weight, in.w)) {
+          ++updated;
+          surface |= row[x].weight != 0 && row[x].sdf <= 0;
+        }
       }
     }
   }
+  *wrote_surface = surface;
   return updated;
 }
 
@@ -160,7 +164,7 @@ HF_AVX2 void band_row_avx2(const float* depth, int width, const double* ray_x, d
   }
 }
 
-HF_AVX2 int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInputs& in) {
+HF_AVX2 int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInputs& in, bool* wrote_surface) {
   if (in.K.width * in.K.height < 2) throw Error("update_block_avx2: the image must have at least two pixels");
   const hf_intrinsics K = in.K;
   const __m256 zero = _mm256_setzero_ps(), one = splat(1.0f), half = splat(0.5f);
@@ -179,6 +183,7 @@ HF_AVX2 int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInp
   const __m256 step_z = mul(iota(), splat(b.s_x[2]));
 
   int updated = 0;
+  __m256i surface = _mm256_setzero_si256();  // lanes that wrote an observed sdf <= 0
   for (int z = 0; z < HF_BLOCK_SIZE; ++z) {
     for (int y = 0; y < HF_BLOCK_SIZE; ++y) {
       float p[3];
@@ -221,6 +226,10 @@ HF_AVX2 int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInp
       const __m256i lo_new =
           _mm256_or_si256(_mm256_and_si256(truncate(s), low16), _mm256_slli_epi32(truncate(wq), 16));
       vox.lo = as_si(select(upd, as_ps(lo_new), as_ps(vox.lo)));
+      const __m256i sdf16 = _mm256_srai_epi32(_mm256_slli_epi32(lo_new, 16), 16);
+      const __m256i unobserved = _mm256_cmpeq_epi32(_mm256_srli_epi32(lo_new, 16), _mm256_setzero_si256());
+      surface = _mm256_or_si256(
+          surface, _mm256_and_si256(as_si(upd), _mm256_andnot_si256(unobserved, _mm256_cmpgt_epi32(splat_i(1), sdf16))));
 
       if (in.rgb != nullptr) {
         const __m256 colour = and_(upd, cmp_lt(eta, mu));
@@ -254,6 +263,7 @@ HF_AVX2 int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInp
       updated += count(upd);
     }
   }
+  *wrote_surface = !_mm256_testz_si256(surface, surface);
   return updated;
 }
 
@@ -263,7 +273,7 @@ void band_row_avx2(const float*, int, const double*, double, const BandFrame&, c
   throw Error("band_row_avx2: this build has no AVX2 path");
 }
 
-int update_block_avx2(Voxel*, const BlockFrame&, const FrameInputs&) {
+int update_block_avx2(Voxel*, const BlockFrame&, const FrameInputs&, bool*) {
   throw Error("update_block_avx2: this build has no AVX2 path");
 }
 

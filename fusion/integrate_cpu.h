@@ -68,10 +68,11 @@ struct BlockFrame {
   float s_x[3], s_y[3], s_z[3];
 };
 
-// Both return the number of voxels updated (observed by the frame).
-int update_block(Voxel* voxels, const BlockFrame& b, const FrameInputs& in);
+// Both return the number of voxels updated (observed by the frame), and set *wrote_surface to whether one of them
+// now holds sdf <= 0 (what VoxelBlockGrid::surface_free summarises: integrate() then need not scan the block).
+int update_block(Voxel* voxels, const BlockFrame& b, const FrameInputs& in, bool* wrote_surface);
 // Only where hf::cpu_has_avx2() (core/simd_avx2.h) and the image has at least two pixels (the colour gather reads
 // one byte before the pixel's three); throws hf::Error in a build without the AVX2 path.
-int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInputs& in);
+int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInputs& in, bool* wrote_surface);
 
 }  // namespace hf::fusion::detail

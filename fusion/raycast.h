@@ -57,23 +57,14 @@ class BlockLookup {
                        const std::vector<std::uint8_t>* surface_free = nullptr);
 
   const VoxelBlock* find(int bx, int by, int bz) const {
-    bool unused;
-    return find(bx, by, bz, &unused);
+    const Slot* s = probe(bx, by, bz);
+    return s != nullptr ? s->block : nullptr;
   }
   // Also whether a raycast may skip the block (its surface_free flag; false for a missing block).
   const VoxelBlock* find(int bx, int by, int bz, bool* skippable) const {
-    *skippable = false;
-    if (slots_.empty()) return nullptr;
-    size_t i = slot_of(bx, by, bz);
-    for (;;) {
-      const Slot& s = slots_[i];
-      if (s.block == nullptr) return nullptr;
-      if (s.x == bx && s.y == by && s.z == bz) {
-        *skippable = s.skippable;
-        return s.block;
-      }
-      i = (i + 1) & mask_;
-    }
+    const Slot* s = probe(bx, by, bz);
+    *skippable = s != nullptr && s->skippable;
+    return s != nullptr ? s->block : nullptr;
   }
   size_t size() const { return size_; }
 
@@ -106,6 +97,17 @@ class BlockLookup {
     bool skippable = false;  // in what was padding
     const VoxelBlock* block = nullptr;
   };
+  // The slot holding (bx, by, bz), or nullptr.
+  const Slot* probe(int bx, int by, int bz) const {
+    if (slots_.empty()) return nullptr;
+    size_t i = slot_of(bx, by, bz);
+    for (;;) {
+      const Slot& s = slots_[i];
+      if (s.block == nullptr) return nullptr;
+      if (s.x == bx && s.y == by && s.z == bz) return &s;
+      i = (i + 1) & mask_;
+    }
+  }
   std::vector<Slot> slots_;
   std::vector<Slot> regions_;  // Slot::block is any block of the region (only tested for nullptr)
   size_t region_mask_ = 0;

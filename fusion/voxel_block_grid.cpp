@@ -79,16 +79,22 @@ const VoxelBlock* VoxelBlockGrid::find(const BlockCoord& c) const {
 
 VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c) { return allocate(c, nullptr); }
 
-VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c, bool* created) {
+VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c, bool* created) { return allocate(c, created, nullptr); }
+
+VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c, bool* created, std::uint8_t** surface_free) {
   if (created) *created = false;
+  auto found = [&](std::uint32_t slot) {
+    if (surface_free != nullptr) *surface_free = &impl_->slot_surface_free(slot);
+    return impl_->slot_block(slot);
+  };
   {
     std::shared_lock lock(impl_->mutex);
     auto it = impl_->table.find(c);
-    if (it != impl_->table.end()) return impl_->slot_block(it->second);
+    if (it != impl_->table.end()) return found(it->second);
   }
   std::unique_lock lock(impl_->mutex);
   auto it = impl_->table.find(c);  // another thread may have created it between the two locks
-  if (it != impl_->table.end()) return impl_->slot_block(it->second);
+  if (it != impl_->table.end()) return found(it->second);
   std::uint32_t slot;
   if (!impl_->free_slots.empty()) {
     slot = impl_->free_slots.back();
@@ -113,6 +119,7 @@ VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c, bool* created) {
   impl_->slot_surface_free(slot) = 0;
   impl_->table.emplace(c, slot);
   if (created) *created = true;
+  if (surface_free != nullptr) *surface_free = &impl_->slot_surface_free(slot);
   return block;
 }
 

@@ -87,6 +87,9 @@ class VoxelBlockGrid {
   VoxelBlock* allocate(const BlockCoord& c);
   // Like allocate(), and tells whether the block was created by this call.
   VoxelBlock* allocate(const BlockCoord& c, bool* created);
+  // The same, and where the block's surface_free flag lives (valid while the block is), for a caller that sets the
+  // flags of many blocks without a hash look-up each (integrate()).
+  VoxelBlock* allocate(const BlockCoord& c, bool* created, std::uint8_t** surface_free);
   // Frees a block (its slot returns to the pool; its memory is kept for reuse). Returns false when it did not
   // exist. Not thread-safe.
   bool release(const BlockCoord& c);

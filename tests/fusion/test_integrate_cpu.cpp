@@ -157,38 +157,52 @@ TEST(IntegrateCpu, Avx2BandEndsAreTheLoops) {
 TEST(IntegrateCpu, LoopIsTheSharedKernelVoxelByVoxel) {
   std::mt19937 rng(7);
   size_t updated_total = 0;
+  int surface_cases = 0;
   for (int trial = 0; trial < 200; ++trial) {
     Case c = random_case(rng, trial % 2 == 1, trial % 3 != 0);
     VoxelBlock expected = c.block;
     int expected_updated = 0;
+    bool expected_surface = false;  // an updated voxel holds an observed sdf <= 0
     for (int z = 0; z < 8; ++z)
       for (int y = 0; y < 8; ++y)
         for (int x = 0; x < 8; ++x) {
           float p[3];
           for (int a = 0; a < 3; ++a)
             p[a] = ((c.b.p0[a] + float(z) * c.b.s_z[a]) + float(y) * c.b.s_y[a]) + float(x) * c.b.s_x[a];
-          expected_updated += hf_integrate_voxel(&expected.voxels[hf_voxel_index(x, y, z)],
-                                                 hf_make_float4(p[0], p[1], p[2], 1.0f), c.in.depth, c.in.incidence,
-                                                 c.in.rgb, c.in.K, c.in.mu, c.in.max_weight, c.in.w);
+          Voxel& v = expected.voxels[hf_voxel_index(x, y, z)];
+          if (hf_integrate_voxel(&v, hf_make_float4(p[0], p[1], p[2], 1.0f), c.in.depth, c.in.incidence, c.in.rgb,
+                                 c.in.K, c.in.mu, c.in.max_weight, c.in.w)) {
+            ++expected_updated;
+            expected_surface |= v.weight != 0 && v.sdf <= 0;
+          }
         }
-    EXPECT_EQ(detail::update_block(c.block.voxels.data(), c.b, c.in), expected_updated);
+    bool wrote_surface = !expected_surface;
+    EXPECT_EQ(detail::update_block(c.block.voxels.data(), c.b, c.in, &wrote_surface), expected_updated);
+    EXPECT_EQ(wrote_surface, expected_surface) << "trial " << trial;
+    surface_cases += expected_surface ? 1 : 0;
     for (int i = 0; i < HF_VOXELS_PER_BLOCK; ++i)
       ASSERT_TRUE(same_bits(c.block.voxels[i], expected.voxels[i])) << "trial " << trial << " voxel " << i;
     updated_total += size_t(expected_updated);
   }
   EXPECT_GT(updated_total, 200u * 20u);  // the cases exercise updates, not only rejections
+  EXPECT_GT(surface_cases, 20);           // both answers of wrote_surface occur
+  EXPECT_LT(surface_cases, 180);
 }
 
 TEST(IntegrateCpu, Avx2PathGivesTheLoopsBits) {
   if (!cpu_has_avx2()) GTEST_SKIP() << "this processor (or build) has no AVX2: only the voxel loop runs here";
   std::mt19937 rng(11);
   size_t updated_total = 0, coloured = 0;
+  int surface_cases = 0;
   for (int trial = 0; trial < 400; ++trial) {
     Case c = random_case(rng, trial % 2 == 1, trial % 3 != 0);
     VoxelBlock scalar = c.block, simd = c.block;
-    const int n_scalar = detail::update_block(scalar.voxels.data(), c.b, c.in);
-    const int n_simd = detail::update_block_avx2(simd.voxels.data(), c.b, c.in);
+    bool surface_scalar = false, surface_simd = true;
+    const int n_scalar = detail::update_block(scalar.voxels.data(), c.b, c.in, &surface_scalar);
+    const int n_simd = detail::update_block_avx2(simd.voxels.data(), c.b, c.in, &surface_simd);
     ASSERT_EQ(n_simd, n_scalar) << "trial " << trial;
+    ASSERT_EQ(surface_simd, surface_scalar) << "trial " << trial;
+    surface_cases += surface_scalar ? 1 : 0;
     for (int i = 0; i < HF_VOXELS_PER_BLOCK; ++i) {
       const Voxel& a = scalar.voxels[i];
       const Voxel& s = simd.voxels[i];
@@ -202,6 +216,8 @@ TEST(IntegrateCpu, Avx2PathGivesTheLoopsBits) {
   }
   EXPECT_GT(updated_total, 400u * 20u);
   EXPECT_GT(coloured, 100u);  // first colour samples happened
+  EXPECT_GT(surface_cases, 40);  // both answers of wrote_surface occur
+  EXPECT_LT(surface_cases, 360);
 }
 
 // The colour gather reads 32 bits around a pixel's three bytes: the first and last pixels of the image must come
@@ -224,9 +240,11 @@ TEST(IntegrateCpu, Avx2ColourOfTheFirstAndLastPixel) {
     c.b.p0[0] = -0.9f, c.b.p0[1] = -0.9f, c.b.p0[2] = 0.99f;
     c.b.s_x[0] = 0.25f, c.b.s_y[1] = 0.25f, c.b.s_z[2] = 0.003f;
     VoxelBlock scalar = c.block, simd = c.block;
-    const int n = detail::update_block(scalar.voxels.data(), c.b, c.in);
+    bool surface_scalar = false, surface_simd = false;
+    const int n = detail::update_block(scalar.voxels.data(), c.b, c.in, &surface_scalar);
     EXPECT_GT(n, 0);
-    EXPECT_EQ(detail::update_block_avx2(simd.voxels.data(), c.b, c.in), n);
+    EXPECT_EQ(detail::update_block_avx2(simd.voxels.data(), c.b, c.in, &surface_simd), n);
+    EXPECT_EQ(surface_simd, surface_scalar);
     for (int i = 0; i < HF_VOXELS_PER_BLOCK; ++i) ASSERT_TRUE(same_bits(scalar.voxels[i], simd.voxels[i])) << i;
   }
 }

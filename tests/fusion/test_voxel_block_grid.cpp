@@ -245,6 +245,17 @@ TEST(VoxelBlockGrid, SurfaceFreeFlagFollowsTheBlock) {
   ASSERT_TRUE(grid.release(b));
   grid.allocate(b);  // reuses the freed slot
   EXPECT_FALSE(grid.surface_free(b));
+  // The flag's address from allocate(), for a new and for an existing block, is the flag surface_free() reads.
+  for (const BlockCoord& c : {BlockCoord{5, 5, 5}, a}) {
+    bool created = false;
+    std::uint8_t* flag = nullptr;
+    ASSERT_NE(grid.allocate(c, &created, &flag), nullptr);
+    EXPECT_EQ(created, c.x == 5);
+    ASSERT_NE(flag, nullptr);
+    EXPECT_EQ(*flag, 0);
+    *flag = 1;
+    EXPECT_TRUE(grid.surface_free(c));
+  }
 }
 
 TEST(GarbageCollect, ReleasesUnobservedAndFreeSpaceBlocksOnly) {
