@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <string>
 
 #include "datasets/presets.h"
 #include "datasets/synthetic_sequence.h"
@@ -26,6 +27,15 @@ VolumeParams params_1cm(size_t capacity = 1 << 15) {
   p.truncation_vox = 4.0;
   p.capacity_blocks = capacity;
   return p;
+}
+
+// A synthetic sequence of a preset (with its sensor noise) seen by small_camera().
+datasets::SyntheticSequence small_sequence(const std::string& preset, int frames) {
+  datasets::SyntheticOptions options;
+  options.preset = preset;
+  options.frames = frames;
+  options.camera = small_camera();
+  return datasets::SyntheticSequence(options);
 }
 
 Eigen::Vector3d voxel_centre(const VolumeParams& p, const BlockCoord& c, int x, int y, int z) {
@@ -227,11 +237,7 @@ TEST(Integrate, TiltedPlaneGivesTrueDistanceWithPointToPlane) {
 // of the sphere preset: the SDF stays within (n + 1) / 4 int16 steps (each update rounds by at most half a step
 // and the running average shrinks earlier errors), the weight is exact, the colour within (n + 1) / 4 + 1 levels.
 TEST(Integrate, QuantisationCostsNoAccuracyAgainstFloatReference) {
-  datasets::SyntheticOptions options;
-  options.preset = "sphere";
-  options.frames = 12;
-  options.camera = small_camera();
-  const datasets::SyntheticSequence seq(options);
+  const datasets::SyntheticSequence seq = small_sequence("sphere", 12);
   const VolumeParams volume = params_1cm();
   VoxelBlockGrid grid(volume);
   const float mu = float(volume.truncation_m());
@@ -428,11 +434,7 @@ TEST(Integrate, ErrorsAndDeterminism) {
     EXPECT_NE(std::string(e.what()).find("capacity 20 blocks"), std::string::npos) << e.what();
   }
   // The same frames give the same bytes however TBB schedules the blocks.
-  datasets::SyntheticOptions options;
-  options.preset = "sphere";
-  options.frames = 3;
-  options.camera = camera;
-  const datasets::SyntheticSequence seq(options);
+  const datasets::SyntheticSequence seq = small_sequence("sphere", 3);
   std::string bytes[2];
   for (int run = 0; run < 2; ++run) {
     VoxelBlockGrid g(params_1cm());
@@ -449,11 +451,7 @@ TEST(Integrate, ErrorsAndDeterminism) {
 // exact for every block with an observed voxel, false (never skip) for blocks no frame has observed yet. Over a
 // noisy sequence both kinds of flag occur.
 TEST(Integrate, SurfaceFreeFlagsMatchTheVoxels) {
-  datasets::SyntheticOptions options;
-  options.preset = "room";
-  options.frames = 12;
-  options.camera = small_camera();
-  const datasets::SyntheticSequence seq(options);
+  const datasets::SyntheticSequence seq = small_sequence("room", 12);
   VoxelBlockGrid grid(params_1cm());
   size_t free_blocks = 0, surface_blocks = 0;
   for (int f = 0; f < seq.size(); f += 3) {
@@ -476,12 +474,7 @@ TEST(Integrate, SurfaceFreeFlagsMatchTheVoxels) {
 // shared per-voxel kernel hf_integrate_voxel gives voxel by voxel (the OpenCL path will run the latter), with the
 // voxel centres stepped through the block the same way.
 TEST(Integrate, UpdateLoopMatchesPerVoxelKernelBitForBit) {
-  datasets::SyntheticOptions options;
-  options.preset = "sphere";
-  options.frames = 3;
-  options.camera = small_camera();
-  options.noise_enabled = true;
-  const datasets::SyntheticSequence seq(options);
+  const datasets::SyntheticSequence seq = small_sequence("sphere", 3);
   const VolumeParams volume = params_1cm();
   const hf_intrinsics K = seq.camera().kernel_intrinsics();
   const float mu = float(volume.truncation_m());
