@@ -65,6 +65,7 @@ size_t bring_back(VoxelBlockGrid& grid, BlockStore& store, const std::vector<Blo
       continue;
     }
     store.take(c, block);
+    grid.set_surface_free(c, block_is_surface_free(*block));  // the raycast may skip it again at once
     ++moved;
   }
   return moved;

@@ -150,7 +150,10 @@ Volume parse_volume(std::string_view bytes, const std::string& name) {
     VoxelBlock scratch;
     block = (flags & kFlagStreamed) ? &scratch : volume.grid.allocate(c);
     std::memcpy(block->voxels.data(), r + 16, sizeof(VoxelBlock));
-    if (flags & kFlagStreamed) volume.store.put(c, scratch);
+    if (flags & kFlagStreamed)
+      volume.store.put(c, scratch);
+    else
+      volume.grid.set_surface_free(c, block_is_surface_free(*block));  // derived, so not stored in the file
   }
   return volume;
 }

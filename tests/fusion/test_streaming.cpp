@@ -76,6 +76,14 @@ TEST(Streaming, OutAndBackIsBitIdentical) {
   EXPECT_EQ(grid.block_count(), 0u);
   EXPECT_EQ(stream_in_all(grid, store), blocks);
   EXPECT_EQ(serialize_volume(grid), before);
+  // Blocks streamed back get the raycast's per-block flag from their voxels.
+  size_t free_blocks = 0;
+  for (const auto& [c, b] : grid.blocks()) {
+    EXPECT_EQ(grid.surface_free(c), block_is_surface_free(*b));
+    free_blocks += grid.surface_free(c) ? 1 : 0;
+  }
+  EXPECT_GT(free_blocks, 0u);
+  EXPECT_LT(free_blocks, blocks);
 }
 
 // Integrating with blocks parked in the store gives exactly what integrating without streaming gives: blocks the
