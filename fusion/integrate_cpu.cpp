@@ -228,8 +228,8 @@ HF_AVX2 int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInp
       vox.lo = as_si(select(upd, as_ps(lo_new), as_ps(vox.lo)));
       const __m256i sdf16 = _mm256_srai_epi32(_mm256_slli_epi32(lo_new, 16), 16);
       const __m256i unobserved = _mm256_cmpeq_epi32(_mm256_srli_epi32(lo_new, 16), _mm256_setzero_si256());
-      surface = _mm256_or_si256(
-          surface, _mm256_and_si256(as_si(upd), _mm256_andnot_si256(unobserved, _mm256_cmpgt_epi32(splat_i(1), sdf16))));
+      const __m256i written_surface = _mm256_andnot_si256(unobserved, _mm256_cmpgt_epi32(splat_i(1), sdf16));
+      surface = _mm256_or_si256(surface, _mm256_and_si256(as_si(upd), written_surface));
 
       if (in.rgb != nullptr) {
         const __m256 colour = and_(upd, cmp_lt(eta, mu));

@@ -3,22 +3,21 @@
 //   RaycastResult r = raycast(grid, camera, T_world_camera);   // vertex/normal/colour/depth maps, camera frame
 //
 // Per pixel (KinectFusion / InfiniTAM / Niessner et al. 2013): the ray from the camera centre through the pixel
-// centre is marched within [min_depth_m, max_depth_m], narrowed to the depth range of the allocated blocks its
-// 8 x 8 pixel tile sees (InfiniTAM's range image; blocks are clipped against the near plane before they are
-// projected). Where the block containing the ray point does not exist the ray jumps to where it leaves that block,
-// or the whole 4 x 4 x 4-block region when that holds no block (free and unseen space are never stepped through
-// voxel by voxel); an allocated block without surface (no observed voxel with sdf <= 0:
-// VoxelBlockGrid::surface_free) is crossed in one step too. Inside allocated blocks, where the nearest voxel is far in front of the surface (sdf > 0.5) the
-// ray advances by step_fraction of the distance bound sdf * mu - sqrt(3)/2 voxel without interpolating; nearer
-// the surface it takes steps of step_fraction * sdf * mu (at least min_step_vox voxels), sampling the trilinearly
-// interpolated SDF. The first sign change from + to - is the surface (a change from - to +, seen when a
-// ray leaves the back of a surface, is ignored); the crossing is refined by linear interpolation of the two
-// bracketing samples, then Illinois regula falsi on the same bracket until it, or the step the last sample predicts,
-// is below refine_tol_vox (0.001 voxel by default). Normals are
-// the normalised SDF gradient by central differences of trilinear samples one voxel apart (taken from one gathered
-// neighbourhood of 32 voxels, VolumeSampler::normal); colour is trilinear. With RaycastOptions::depth_hint (the
-// depth just integrated from the same pose, as a SLAM pipeline has it) each ray first searches a narrow bracket
-// around the hinted depth.
+// centre is marched within [min_depth_m, max_depth_m], narrowed to the depth range of the allocated blocks its 8 x 8
+// pixel tile sees (InfiniTAM's range image; blocks are clipped against the near plane before they are projected).
+// Where the block containing the ray point does not exist the ray jumps to where it leaves that block, or the whole
+// 4 x 4 x 4-block region when that holds no block (free and unseen space are never stepped through voxel by voxel); an
+// allocated block without surface (no observed voxel with sdf <= 0: VoxelBlockGrid::surface_free) is crossed in one
+// step too. Inside allocated blocks, where the nearest voxel is far in front of the surface (sdf > 0.5) the ray
+// advances by step_fraction of the distance bound sdf * mu - sqrt(3)/2 voxel without interpolating; nearer the
+// surface it takes steps of step_fraction * sdf * mu (at least min_step_vox voxels), sampling the trilinearly
+// interpolated SDF. The first sign change from + to - is the surface (a change from - to +, seen when a ray leaves
+// the back of a surface, is ignored); the crossing is refined by linear interpolation of the two bracketing samples,
+// then Illinois regula falsi on the same bracket until it, or the step the last sample predicts, is below
+// refine_tol_vox (0.001 voxel by default). Normals are the normalised SDF gradient by central differences of
+// trilinear samples one voxel apart (taken from one gathered neighbourhood of 32 voxels, VolumeSampler::normal);
+// colour is trilinear. With RaycastOptions::depth_hint (the depth just integrated from the same pose, as a SLAM
+// pipeline has it) each ray first searches a narrow bracket around the hinted depth.
 //
 // Outputs are in the CAMERA frame (x right, y down, z forward, metres); depth is z along the optical axis, like a
 // depth image. Pixels without a hit have depth 0, vertex/normal w = 0, colour black. A hit whose gradient cannot
@@ -221,8 +220,9 @@ struct RaycastOptions {
   // tracking raycast turns it off; the colour image is then black.
   bool color = true;
   // Skip whole blocks with no surface inside (VoxelBlockGrid::surface_free, kept by integrate()) in one step
-  // instead of crossing them voxel by voxel. Turning it off changes only the cost (tests/fusion/test_raycast.cpp
-  // holds the two to the same hits); it is here for that comparison.
+  // instead of crossing them voxel by voxel. Turning it off changes the cost, and the result only where two
+  // sampling patterns of the same field differ anyway: at silhouettes and the fringe of the observed volume
+  // (tests/fusion/test_raycast.cpp). It is here for that comparison.
   bool skip_blocks = true;
   // The depth image just integrated from this same pose (same size as the camera; metres along the optical axis,
   // 0 = none), or nullptr. Not owned; must outlive the raycast() call. A ray whose pixel has a hint d > 0 searches

@@ -218,7 +218,8 @@ bool block_is_surface_free(const VoxelBlock& block) {
   for (int i = 0; i < HF_VOXELS_PER_BLOCK / 2; i += 2) {
     // Two loads of two voxels each; their low words (lanes 0 and 2) side by side.
     const __m128i a = _mm_loadu_si128(p + i), b = _mm_loadu_si128(p + i + 1);
-    const __m128i w = _mm_castps_si128(_mm_shuffle_ps(_mm_castsi128_ps(a), _mm_castsi128_ps(b), _MM_SHUFFLE(2, 0, 2, 0)));
+    const __m128i w =
+        _mm_castps_si128(_mm_shuffle_ps(_mm_castsi128_ps(a), _mm_castsi128_ps(b), _MM_SHUFFLE(2, 0, 2, 0)));
     const __m128i sdf = _mm_srai_epi32(_mm_slli_epi32(w, 16), 16);
     const __m128i unobserved = _mm_cmpeq_epi32(_mm_srli_epi32(w, 16), zero);  // weight 0 (unsigned: any weight)
     surface = _mm_or_si128(surface, _mm_andnot_si128(unobserved, _mm_cmplt_epi32(sdf, one)));

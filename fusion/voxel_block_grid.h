@@ -119,10 +119,10 @@ class VoxelBlockGrid {
   // sdf <= 0, so every trilinear sample whose eight corners lie in the block is positive or unobserved and no
   // surface crosses its interior (fusion/raycast.h). integrate() sets it for every block it updates
   // (block_is_surface_free of the result), as do loading a volume and streaming a block back; allocate() starts
-  // every block at false (never skip), which stays correct whatever is written into it. Code that writes voxels of a block integrate() has flagged must clear the
-  // flag (set_surface_free(c, false)) or set it from block_is_surface_free. Setting the flag of a missing block
-  // does nothing; a missing block reads false. Thread-safe like voxel writes: distinct blocks from distinct
-  // threads, not concurrently with readers of the same block's flag.
+  // every block at false (never skip), which stays correct whatever is written into it. Code that writes voxels
+  // of a block whose flag is set must clear it (set_surface_free(c, false)) or set it from block_is_surface_free.
+  // Setting the flag of a missing block does nothing; a missing block reads false. Thread-safe like voxel writes:
+  // distinct blocks from distinct threads, not concurrently with readers of the same block's flag.
   void set_surface_free(const BlockCoord& c, bool surface_free);
   bool surface_free(const BlockCoord& c) const;
 

@@ -545,8 +545,8 @@ TEST(Raycast, BlocksInViewHoldEveryBlockARayReads) {
       for (int dk = -1; dk <= 2; ++dk)
         for (int dj = -1; dj <= 2; ++dj)
           for (int di = -1; di <= 2; ++di) {
-            const Eigen::Vector3d centre = (Eigen::Vector3d(i0 + di, j0 + dj, k0 + dk) + Eigen::Vector3d::Constant(0.5)) * voxel_m;
-            const BlockCoord c = grid.block_of(centre);
+            const Eigen::Vector3d voxel(i0 + di, j0 + dj, k0 + dk);
+            const BlockCoord c = grid.block_of((voxel + Eigen::Vector3d::Constant(0.5)) * voxel_m);
             if (grid.find(c) == nullptr) continue;
             ++read;
             ASSERT_TRUE(set.count({c.x, c.y, c.z})) << "pose " << i << ": block " << c.x << " " << c.y << " " << c.z
