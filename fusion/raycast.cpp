@@ -24,9 +24,10 @@ namespace hf::fusion {
 // ---------------------------------------------------------------------------------------------------------------
 // BlockLookup
 
-BlockLookup::BlockLookup(const VoxelBlockGrid& grid, bool skippable) {
+BlockLookup::BlockLookup(const VoxelBlockGrid& grid) {
   std::vector<std::uint8_t> surface_free;
-  *this = BlockLookup(grid.blocks_unordered(skippable ? &surface_free : nullptr), skippable ? &surface_free : nullptr);
+  const auto blocks = grid.blocks_unordered(&surface_free);
+  *this = BlockLookup(blocks, &surface_free);
 }
 
 BlockLookup::BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBlock*>>& blocks,

@@ -49,8 +49,8 @@ namespace hf::fusion {
 class BlockLookup {
  public:
   BlockLookup() = default;
-  // With the grid's surface_free flags (VoxelBlockGrid::surface_free) when skippable is true.
-  explicit BlockLookup(const VoxelBlockGrid& grid, bool skippable = true);
+  // Every block of the grid, with its surface_free flag (VoxelBlockGrid::surface_free) as find()'s skippable.
+  explicit BlockLookup(const VoxelBlockGrid& grid);
   // surface_free: one flag per block (same order), or nullptr (no block is skippable).
   explicit BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBlock*>>& blocks,
                        const std::vector<std::uint8_t>* surface_free = nullptr);
