@@ -1,7 +1,8 @@
 // Raycast and marching-cubes meshing on the room preset (issue 3): a 640x480 raycast at 1 cm and 5 mm voxels
 // after fusing 20 noisy frames, the SLAM pipeline's raycast at the pose just integrated with and without
 // RaycastOptions::depth_hint (640x480 and 320x240; with the hint also with the pipeline's other tracking options),
-// and meshing the whole map. Results in bench/results/fusion.md.
+// the floor under those raycasts (BM_RaycastFloor: one sample and normal per hit pixel, no search), and meshing
+// the whole map. Results in bench/results/fusion.md.
 // cpu_ms_all_threads is the CPU time of all threads per iteration: with other jobs on the 2 cores it depends on
 // the load far less than the wall time does.
 //   build/release/bench/bench_surface
@@ -9,6 +10,10 @@
 
 #include <sys/resource.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
 #include <map>
 #include <memory>
 
@@ -106,6 +111,62 @@ BENCHMARK(BM_RaycastAtIntegratedPose)
     ->Args({10, 1, 1, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// The floor under a raycast of this volume: at every pixel where the 640x480 raycast at the integrated pose (hint,
+// pipeline options) hit, one trilinear SDF sample at the hit point (VolumeSampler::sdf: what a ray that lands on
+// the surface with its first sample still pays) and, with range(1) = 1, its normal (VolumeSampler::normal), over
+// the same 16 x 16-pixel tiles on all cores, with the look-up table prebuilt. No march, no range image, no output
+// images: what remains of raycast() when every ray's search costs nothing. range(0) = voxel mm.
+void BM_RaycastFloor(benchmark::State& state) {
+  const double voxel_m = state.range(0) / 1000.0;
+  const bool with_normal = state.range(1) != 0;
+  Scene& s = room(voxel_m);
+  const datasets::SyntheticFrame f = s.seq->frame(76);
+  RaycastOptions opts = slam::PipelineConfig().raycast;
+  opts.shade = false;
+  opts.depth_hint = &f.depth;
+  const RaycastResult hits = raycast(*s.grid, s.seq->camera(), f.T_world_camera, opts);
+  const int W = s.seq->camera().width, H = s.seq->camera().height;
+  std::vector<Eigen::Vector3f> p_vox(size_t(W) * H, Eigen::Vector3f::Constant(std::nanf("")));
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const hf_float4 v = hits.vertices(x, y);
+      if (v.w != 1.0f) continue;
+      p_vox[size_t(y) * W + x] =
+          s.grid->voxel_coords(f.T_world_camera * Eigen::Vector3d(v.x, v.y, v.z)).cast<float>();
+    }
+  std::vector<std::uint8_t> surface_free;
+  const auto blocks = blocks_in_view(*s.grid, s.seq->camera(), f.T_world_camera, opts, &surface_free);
+  const BlockLookup lookup(blocks, &surface_free);
+  constexpr int kWork = 16;
+  const int WX = (W + kWork - 1) / kWork, WY = (H + kWork - 1) / kWork;
+  std::vector<int> tile_normals(size_t(WX) * WY);
+  const double cpu0 = process_cpu_s();
+  for (auto _ : state) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, WX * WY), [&](const tbb::blocked_range<int>& work) {
+      VolumeSampler sampler(lookup, opts.min_weight);
+      for (int wi = work.begin(); wi != work.end(); ++wi) {
+        const int x0 = (wi % WX) * kWork, y0 = (wi / WX) * kWork;
+        int n_ok = 0;
+        for (int y = y0; y < std::min(y0 + kWork, H); ++y)
+          for (int x = x0; x < std::min(x0 + kWork, W); ++x) {
+            const Eigen::Vector3f& p = p_vox[size_t(y) * W + x];
+            float sdf = 0.0f;
+            Eigen::Vector3f n;
+            if (!std::isnan(p.x()) && sampler.sdf(p, &sdf) && (!with_normal || sampler.normal(p, &n))) ++n_ok;
+          }
+        tile_normals[size_t(wi)] = n_ok;
+      }
+    });
+    benchmark::DoNotOptimize(tile_normals.data());
+  }
+  int normals = 0;  // pixels whose sample (and normal) was valid
+  for (int n : tile_normals) normals += n;
+  state.counters["cpu_ms_all_threads"] = (process_cpu_s() - cpu0) * 1e3 / double(state.iterations());
+  state.counters["hits"] = hits.hit_count;
+  state.counters["samples_ok"] = normals;
+}
+BENCHMARK(BM_RaycastFloor)->ArgNames({"voxel_mm", "normal"})->Args({10, 0})->Args({10, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_Mesh(benchmark::State& state) {
   const double voxel_m = state.range(0) / 1000.0;
