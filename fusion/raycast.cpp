@@ -739,6 +739,30 @@ std::vector<std::pair<BlockCoord, const VoxelBlock*>> blocks_in_view(const Voxel
   return out;
 }
 
+void forward_project_depth(const VertexMap& vertices, const SE3& T_cur_prev, const PinholeCamera& camera,
+                           DepthImage* out) {
+  if (!T_cur_prev.is_finite()) throw Error("forward_project_depth: expected a finite T_cur_prev");
+  const int W = camera.width, H = camera.height;
+  ensure_size(out, W, H);
+  std::fill(out->data(), out->data() + size_t(W) * H, 0.0f);
+  const Eigen::Matrix3f R = T_cur_prev.rotation().cast<float>();
+  const Eigen::Vector3f t = T_cur_prev.translation().cast<float>();
+  const float fx = float(camera.fx), fy = float(camera.fy), cx = float(camera.cx), cy = float(camera.cy);
+  for (int y = 0; y < vertices.height(); ++y)
+    for (int x = 0; x < vertices.width(); ++x) {
+      const hf_float4 v = vertices(x, y);
+      if (v.w != 1.0f) continue;
+      const Eigen::Vector3f p = R * Eigen::Vector3f(v.x, v.y, v.z) + t;
+      if (!(p.z() > 0.0f)) continue;
+      // Pixel centres at integers: the nearest pixel is the rounded projection. Compared before the conversion, so
+      // far-off (or non-finite) projections are dropped without an overflowing cast.
+      const float u = std::floor(fx * p.x() / p.z() + cx + 0.5f), w = std::floor(fy * p.y() / p.z() + cy + 0.5f);
+      if (!(u >= 0.0f && u < float(W) && w >= 0.0f && w < float(H))) continue;
+      float& d = (*out)(int(u), int(w));
+      if (d == 0.0f || p.z() < d) d = p.z();
+    }
+}
+
 void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
              const RaycastOptions& options, RaycastResult* out) {
   options.validate(camera);

@@ -273,6 +273,15 @@ std::vector<std::pair<BlockCoord, const VoxelBlock*>> blocks_in_view(const Voxel
                                                                      const RaycastOptions& options,
                                                                      std::vector<std::uint8_t>* surface_free = nullptr);
 
+// InfiniTAM's forward projection of the last raycast: the depth a camera at the current pose sees of the vertices
+// of a vertex map taken at another pose (w = 1 valid, that camera's frame), T_cur_prev taking those to the current
+// camera frame. Each vertex lands on the pixel nearest to its projection; per pixel the nearest (smallest z > 0)
+// is kept, 0 where none lands. A SLAM pipeline fills the holes of RaycastOptions::depth_hint with it: where the
+// frame has no depth, the model's surface seen from the last pose tells the ray where to look. *out gets the
+// camera's size. Throws hf::Error when T_cur_prev is not finite.
+void forward_project_depth(const VertexMap& vertices, const SE3& T_cur_prev, const PinholeCamera& camera,
+                           DepthImage* out);
+
 // Throws hf::Error for invalid options or a camera with non-positive size or focal length.
 RaycastResult raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
                       const RaycastOptions& options = {});

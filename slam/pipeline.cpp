@@ -164,6 +164,7 @@ void visit_scalars(V&& v, PipelineConfig& c) {
   v("max_angular_speed_deg_per_s", c.max_angular_speed_deg_per_s);
   v("max_degenerate_dims", c.max_degenerate_dims);
   v("integrate_poor", c.integrate_poor);
+  v("model_hint", c.model_hint);
   v("min_overlap", c.min_overlap);
   v("min_consistent", c.min_consistent);
   v("stream_radius_m", c.stream_radius_m);
@@ -342,6 +343,7 @@ const char* to_string(TrackState state) {
 // Everything tracking aligns against, all in the camera frame of the last good pose.
 struct Pipeline::Reference {
   fusion::RaycastResult model;   // raycast of the map at the last good pose
+  SE3 T_world_model;             // that pose
   FramePyramid pyramid;          // model vertices/normals per level + the last good frame's intensity/gradients
   bool valid = false;
 };
@@ -421,17 +423,25 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
     if (!poor || config_.integrate_poor) integrate_at(T_world_cur);
     const auto t0 = std::chrono::steady_clock::now();
     // The frame just integrated from this pose tells each ray where the surface is (fusion/raycast.h depth_hint):
-    // its depth at the tracking resolution, from the pyramid's vertices.
+    // its depth at the tracking resolution, from the pyramid's vertices. Where the frame has no depth, the last
+    // model raycast moved to this pose (fusion::forward_project_depth) does: those rays would otherwise march
+    // their tile's whole depth range.
     fusion::RaycastOptions ro = config_.raycast;
-    DepthImage hint;
+    DepthImage hint, model_hint;
     if (r.integrated && !current.levels.empty()) {
       const VertexMap& v = current.levels[0].vertices;
+      const bool have_model = reference_->valid && config_.model_hint;
+      if (have_model)
+        fusion::forward_project_depth(reference_->model.vertices, T_world_cur.inverse() * reference_->T_world_model,
+                                      tracking_camera_, &model_hint);
       hint = DepthImage(v.width(), v.height(), 0.0f);
       for (int y = 0; y < v.height(); ++y)
-        for (int x = 0; x < v.width(); ++x) hint(x, y) = v(x, y).w != 0.0f ? v(x, y).z : 0.0f;
+        for (int x = 0; x < v.width(); ++x)
+          hint(x, y) = v(x, y).w != 0.0f ? v(x, y).z : (have_model ? model_hint(x, y) : 0.0f);
       ro.depth_hint = &hint;
     }
     fusion::raycast(grid_, tracking_camera_, T_world_cur, ro, &reference_->model);
+    reference_->T_world_model = T_world_cur;
     reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
                                               tracking_camera_, config_.pyramid.levels);
     // The frame's intensity levels become the photometric reference; nothing else of it is needed again.

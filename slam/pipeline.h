@@ -62,6 +62,9 @@ struct PipelineConfig {
   // default 0.001 (which exists so hinted and full marches agree exactly): on fr1/rpy the ATE is the same to 1 um
   // and the raycast ~10-15 % cheaper (bench/results/pipeline.md).
   fusion::RaycastOptions raycast{.refine_tol_vox = 0.05, .shade = false, .color = false};
+  // Where the frame has no depth, hint the tracking raycast with the last model raycast moved to the new pose
+  // (fusion::forward_project_depth) instead of marching those rays from the near end of their tile.
+  bool model_hint = true;
   FramePyramidOptions pyramid;
   // The pyramid level tracking starts at: 0 = full resolution; 1 = half (DVO-SLAM tracked at 320x240 in real time
   // on one core). Tracking then uses pyramid.levels levels from there, and the model is raycast at that resolution;
