@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <random>
 
 #include "core/error.h"
@@ -73,6 +74,28 @@ TEST(Pipeline, CombinedTracksRoomWithinOneCentimetre) {
   EXPECT_GT(s.mean_ms.raycast, 0.0);
   EXPECT_EQ(run.frames[0].state, TrackState::initialised);
   for (size_t i = 1; i < run.frames.size(); ++i) EXPECT_EQ(run.frames[i].state, TrackState::tracked) << i;
+}
+
+// PipelineConfig::model_hint: where the frame has no depth (the `holes` preset drops blobs of it), the tracking
+// raycast searches from the last model raycast's depth instead of marching the whole ray. Where both find a
+// surface it is the same one, refined to 0.05 voxel, so tracking must be as good either way: no frame lost, and the
+// ATE no worse than a tenth of a voxel (1 mm) above the full march's (measured over 20 frames: 0.73 mm with the
+// hint, 0.75 mm without).
+TEST(Pipeline, ModelHintTracksHolesAsWellAsTheFullMarch) {
+  std::optional<double> ate[2];
+  for (int on = 0; on < 2; ++on) {
+    auto source = datasets::open_synthetic("holes", half_res("holes", 20));
+    PipelineConfig c = config_for("combined");
+    c.model_hint = on != 0;
+    Pipeline pipeline(c, source->camera());
+    const SequenceRun run = run_sequence(*source, pipeline);
+    const RunSummary s = summarize(run, pipeline, *source, "synthetic:holes");
+    EXPECT_EQ(s.frames_lost, 0) << "model_hint " << on;
+    ate[on] = s.ate_rmse_m();
+    ASSERT_TRUE(ate[on]);
+    EXPECT_LT(*ate[on], 0.01) << "model_hint " << on;
+  }
+  EXPECT_LE(*ate[1], *ate[0] + 0.001);
 }
 
 TEST(Pipeline, GroundTruthMapMatchesTheScene) {
