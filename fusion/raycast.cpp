@@ -675,10 +675,6 @@ bool march_from_hint(VolumeSampler& sampler, const MarchParams& m, const Eigen::
   }
 }
 
-}  // namespace
-
-namespace {
-
 // The slab of the view frustum between the depths near and far, its sides through u = -1, u = W, v = -1, v = H
 // (one pixel of slack around the pixel centres every ray passes through), for rejecting spheres wholly outside.
 class ViewSlab {

@@ -57,7 +57,8 @@ size_t bring_back(VoxelBlockGrid& grid, BlockStore& store, const std::vector<Blo
   size_t moved = 0;
   for (const auto& c : coords) {
     bool created = false;
-    VoxelBlock* block = grid.allocate(c, &created);  // throws CapacityError before anything is lost
+    std::uint8_t* surface_free = nullptr;
+    VoxelBlock* block = grid.allocate(c, &created, &surface_free);  // throws CapacityError before anything is lost
     if (!created) {
       // Both copies exist only if someone broke the invariant; the resident one is newer: drop the stored one.
       VoxelBlock stale;
@@ -65,7 +66,7 @@ size_t bring_back(VoxelBlockGrid& grid, BlockStore& store, const std::vector<Blo
       continue;
     }
     store.take(c, block);
-    grid.set_surface_free(c, block_is_surface_free(*block));  // the raycast may skip it again at once
+    *surface_free = block_is_surface_free(*block) ? 1 : 0;  // the raycast may skip it again at once
     ++moved;
   }
   return moved;

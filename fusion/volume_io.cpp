@@ -146,14 +146,14 @@ Volume parse_volume(std::string_view bytes, const std::string& name) {
     if (volume.grid.find(c) || volume.store.contains(c))
       fail("expected each block once, block (" + std::to_string(c.x) + ", " + std::to_string(c.y) + ", " +
            std::to_string(c.z) + ") appears twice");
-    VoxelBlock* block = nullptr;
     VoxelBlock scratch;
-    block = (flags & kFlagStreamed) ? &scratch : volume.grid.allocate(c);
+    std::uint8_t* surface_free = nullptr;
+    VoxelBlock* block = (flags & kFlagStreamed) ? &scratch : volume.grid.allocate(c, nullptr, &surface_free);
     std::memcpy(block->voxels.data(), r + 16, sizeof(VoxelBlock));
     if (flags & kFlagStreamed)
       volume.store.put(c, scratch);
     else
-      volume.grid.set_surface_free(c, block_is_surface_free(*block));  // derived, so not stored in the file
+      *surface_free = block_is_surface_free(*block) ? 1 : 0;  // derived, so not stored in the file
   }
   return volume;
 }

@@ -77,10 +77,6 @@ const VoxelBlock* VoxelBlockGrid::find(const BlockCoord& c) const {
   return const_cast<VoxelBlockGrid*>(this)->find(c);
 }
 
-VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c) { return allocate(c, nullptr); }
-
-VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c, bool* created) { return allocate(c, created, nullptr); }
-
 VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c, bool* created, std::uint8_t** surface_free) {
   if (created) *created = false;
   auto found = [&](std::uint32_t slot) {

@@ -84,12 +84,10 @@ class VoxelBlockGrid {
   VoxelBlock* find(const BlockCoord& c);
   const VoxelBlock* find(const BlockCoord& c) const;
   // Returns the existing block or a new one with all voxels zero (unobserved). Thread-safe. Throws CapacityError.
-  VoxelBlock* allocate(const BlockCoord& c);
-  // Like allocate(), and tells whether the block was created by this call.
-  VoxelBlock* allocate(const BlockCoord& c, bool* created);
-  // The same, and where the block's surface_free flag lives (valid while the block is), for a caller that sets the
-  // flags of many blocks without a hash look-up each (integrate()).
-  VoxelBlock* allocate(const BlockCoord& c, bool* created, std::uint8_t** surface_free);
+  // With created, also whether the block was created by this call; with surface_free, where the block's
+  // surface_free flag lives (valid while the block is), for a caller that sets it without another hash look-up
+  // (integrate(), loading, streaming back).
+  VoxelBlock* allocate(const BlockCoord& c, bool* created = nullptr, std::uint8_t** surface_free = nullptr);
   // Frees a block (its slot returns to the pool; its memory is kept for reuse). Returns false when it did not
   // exist. Not thread-safe.
   bool release(const BlockCoord& c);

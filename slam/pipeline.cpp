@@ -427,17 +427,17 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
     // model raycast moved to this pose (fusion::forward_project_depth) does: those rays would otherwise march
     // their tile's whole depth range.
     fusion::RaycastOptions ro = config_.raycast;
-    DepthImage hint, model_hint;
+    DepthImage hint;
     if (r.integrated && !current.levels.empty()) {
       const VertexMap& v = current.levels[0].vertices;
-      const bool have_model = reference_->valid && config_.model_hint;
-      if (have_model)
+      if (reference_->valid && config_.model_hint)
         fusion::forward_project_depth(reference_->model.vertices, T_world_cur.inverse() * reference_->T_world_model,
-                                      tracking_camera_, &model_hint);
-      hint = DepthImage(v.width(), v.height(), 0.0f);
+                                      tracking_camera_, &hint);
+      else
+        hint = DepthImage(v.width(), v.height(), 0.0f);
       for (int y = 0; y < v.height(); ++y)
         for (int x = 0; x < v.width(); ++x)
-          hint(x, y) = v(x, y).w != 0.0f ? v(x, y).z : (have_model ? model_hint(x, y) : 0.0f);
+          if (v(x, y).w != 0.0f) hint(x, y) = v(x, y).z;
       ro.depth_hint = &hint;
     }
     fusion::raycast(grid_, tracking_camera_, T_world_cur, ro, &reference_->model);
