@@ -49,69 +49,9 @@
 #include "io/mesh.h"
 #include "registration/frame_pyramid.h"
 #include "registration/registration.h"
+#include "slam/pipeline_config.h"
 
 namespace hf::slam {
-
-struct PipelineConfig {
-  std::string registration = "combined";  // a registry name (make_registration) or "groundtruth"
-  std::string backend = "cpu";             // reduction backend: cpu | opencl
-  fusion::VolumeParams volume;             // voxel_m 0.01, truncation 4 voxels, capacity, weight cap
-  fusion::IntegrateParams integrate;
-  // The tracking raycast. No shading and no colour: tracking reads neither (photometric rows are frame to frame;
-  // render() turns shading on for its own raycast). The crossing is refined to 0.05 voxel, not to raycast's
-  // default 0.001 (which exists so hinted and full marches agree exactly): on fr1/rpy the ATE is the same to 1 um
-  // and the raycast ~10-15 % cheaper (bench/results/pipeline.md).
-  fusion::RaycastOptions raycast{.refine_tol_vox = 0.05, .shade = false, .color = false};
-  // Where the frame has no depth, hint the tracking raycast with the last model raycast moved to the new pose
-  // (fusion::forward_project_depth) instead of marching those rays from the near end of their tile.
-  bool model_hint = true;
-  FramePyramidOptions pyramid;
-  // The pyramid level tracking starts at: 0 = full resolution; 1 = half (DVO-SLAM tracked at 320x240 in real time
-  // on one core). Tracking then uses pyramid.levels levels from there, and the model is raycast at that resolution;
-  // integration always uses the full-resolution frame. Default 1, measured on TUM fr1/rpy (150 frames, combined):
-  // ATE 1.87 cm at 2.9 fps from level 1 against 2.29 cm at 1.0 fps from level 0 (bench/results/pipeline.md): the
-  // full-resolution level adds cost, and with motion blur and rolling shutter no accuracy.
-  int tracking_level = 1;
-  // Registration options; unset = the method's defaults (default_registration_options) with rgb_weight below.
-  std::optional<RegistrationOptions> registration_options;
-  // lambda of eq. 48 when registration_options is unset, measured in this pipeline (frame-to-model ICP rows,
-  // frame-to-frame photometric rows) on TUM fr1/rpy, 150 frames, 320x240 tracking: ATE 3.06 cm at 0.1, 1.87 cm at
-  // 0.4, 2.14 cm at 1.0 (bench/results/pipeline.md). The registration's own default (0.1) is the optimum of the
-  // frame-to-frame sweep, where the ICP reference is as sharp as the frame; the fused model's smoother geometry
-  // shifts the balance towards the photometric rows.
-  float rgb_weight = 0.4f;
-  // Motion prior: the initial guess of T_ref_cur is the last inter-frame motion (constant velocity) when true, the
-  // identity (KinectFusion) when false. Never used right after a lost frame.
-  bool constant_velocity = true;
-  // Plausibility (per second of sensor time since the last good frame): a faster motion is a tracking failure.
-  double max_speed_m_per_s = 3.0;           // handheld Kinect: fr1 peaks near 1 m/s
-  double max_angular_speed_deg_per_s = 360.0;  // fr1/rpy peaks near 150 deg/s
-  int max_degenerate_dims = 3;              // more unconstrained directions than this: lost
-  bool integrate_poor = true;               // integrate frames whose registration is `poor`
-  // Depth consistency (decide stage): the frame's depth, moved by the estimated motion, is compared with the model
-  // depth it lands on (every 4th pixel). Where at least min_overlap of the sampled pixels land on the model, at
-  // least min_consistent of those must agree within 3 sigma of the Kinect axial noise (Nguyen et al. 2012) plus
-  // one voxel; else the depth is garbage (or the pose is wrong) and the frame is lost. Photometric rows can track a
-  // frame whose depth is broken, so the pose alone does not protect the map.
-  double min_overlap = 0.2;
-  double min_consistent = 0.5;
-  // Streaming (Niessner et al. 2013): blocks farther than this from the camera go to the host store after each
-  // frame; 0 = off.
-  double stream_radius_m = 0.0;
-
-  // Throws hf::Error naming the bad field (also validates the nested option structs).
-  void validate() const;
-};
-
-// JSON form of the whole configuration (written into report.json) and back. from_json starts from the defaults
-// and overrides the keys present; an unknown key or a value of the wrong type throws hf::Error naming `where`
-// (e.g. the config file) and the key.
-nlohmann::json config_to_json(const PipelineConfig& config);
-PipelineConfig config_from_json(const nlohmann::json& j, const std::string& where);
-// Reads a JSON config file; errors name the file (and line for JSON syntax errors).
-PipelineConfig load_config(const std::string& path);
-// The same from the file's text; `name` stands for the file in messages.
-PipelineConfig parse_config(const std::string& text, const std::string& name);
 
 enum class TrackState {
   initialised,  // first frame: placed (ground truth or identity) and integrated

@@ -1,0 +1,294 @@
+#include "slam/pipeline_config.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace hf::slam {
+namespace {
+
+// --- The configuration as one list of named fields, visited both ways (to JSON and from JSON) ---------------------
+
+const char* robust_name(RobustKernel k) {
+  switch (k) {
+    case RobustKernel::none: return "none";
+    case RobustKernel::huber: return "huber";
+    case RobustKernel::student_t: return "student_t";
+  }
+  return "none";
+}
+
+struct ToJson {
+  nlohmann::json* j;
+  template <class T>
+  void operator()(const char* key, T& value) {
+    if constexpr (std::is_same_v<T, RobustKernel>) {
+      (*j)[key] = robust_name(value);
+    } else {
+      (*j)[key] = value;
+    }
+  }
+};
+
+struct FromJson {
+  const nlohmann::json* j;
+  std::string where;  // "config.json: registration_options"
+  size_t used = 0;
+  template <class T>
+  void operator()(const char* key, T& value) {
+    auto it = j->find(key);
+    if (it == j->end()) return;
+    ++used;
+    const std::string name = where + "." + key;
+    if constexpr (std::is_same_v<T, RobustKernel>) {
+      if (!it->is_string()) throw Error(name + ": expected a string (none, huber, student_t)");
+      const std::string s = it->get<std::string>();
+      if (s == "none") value = RobustKernel::none;
+      else if (s == "huber") value = RobustKernel::huber;
+      else if (s == "student_t") value = RobustKernel::student_t;
+      else throw Error(name + ": unknown robust kernel '" + s + "' (none, huber, student_t)");
+    } else if constexpr (std::is_same_v<T, bool>) {
+      if (!it->is_boolean()) throw Error(name + ": expected true or false");
+      value = it->get<bool>();
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      if (!it->is_string()) throw Error(name + ": expected a string");
+      value = it->get<std::string>();
+    } else if constexpr (std::is_same_v<T, std::vector<int>>) {
+      if (!it->is_array()) throw Error(name + ": expected an array of integers");
+      std::vector<int> v;
+      for (const auto& e : *it) {
+        if (!e.is_number_integer() || e.get<long long>() < -1000000 || e.get<long long>() > 1000000 ||
+            (e.is_number_unsigned() && e.get<unsigned long long>() > 1000000))
+          throw Error(name + ": expected an array of integers");
+        v.push_back(int(e.get<long long>()));
+      }
+      value = v;
+    } else if constexpr (std::is_integral_v<T>) {
+      // Range-checked in the widest types, so no narrowing conversion ever runs on an out-of-range value.
+      bool ok = it->is_number_integer();
+      if (ok && it->is_number_unsigned()) {
+        ok = it->get<unsigned long long>() <= static_cast<unsigned long long>(std::numeric_limits<T>::max());
+      } else if (ok) {
+        const long long v = it->get<long long>();
+        ok = v >= static_cast<long long>(std::numeric_limits<T>::min()) &&
+             (v < 0 || static_cast<unsigned long long>(v) <= static_cast<unsigned long long>(std::numeric_limits<T>::max()));
+      }
+      if (!ok) throw Error(name + ": expected an integer in [" + std::to_string(std::numeric_limits<T>::min()) + ", " +
+                           std::to_string(std::numeric_limits<T>::max()) + "]");
+      value = it->get<T>();
+    } else {
+      if (!it->is_number()) throw Error(name + ": expected a number");
+      const double v = it->get<double>();
+      if (!std::isfinite(v) || std::abs(v) > double(std::numeric_limits<T>::max()))
+        throw Error(name + ": number out of range");
+      value = static_cast<T>(v);
+    }
+  }
+};
+
+template <class V>
+void visit(V&& v, fusion::VolumeParams& p) {
+  v("voxel_m", p.voxel_m);
+  v("truncation_vox", p.truncation_vox);
+  v("max_weight", p.max_weight);
+  v("capacity_blocks", p.capacity_blocks);
+}
+template <class V>
+void visit(V&& v, fusion::IntegrateParams& p) {
+  v("min_depth_m", p.min_depth_m);
+  v("max_depth_m", p.max_depth_m);
+  v("observation_weight", p.observation_weight);
+  v("point_to_plane", p.point_to_plane);
+}
+template <class V>
+void visit(V&& v, fusion::RaycastOptions& p) {
+  v("min_depth_m", p.min_depth_m);
+  v("max_depth_m", p.max_depth_m);
+  v("step_fraction", p.step_fraction);
+  v("min_step_vox", p.min_step_vox);
+  v("min_weight", p.min_weight);
+  v("refine_tol_vox", p.refine_tol_vox);
+}
+template <class V>
+void visit(V&& v, FramePyramidOptions& p) {
+  v("levels", p.levels);
+  v("bilateral_filter", p.bilateral_filter);
+  v("max_depth_m", p.max_depth_m);
+  v("min_depth_m", p.min_depth_m);
+}
+template <class V>
+void visit(V&& v, RegistrationOptions& o) {
+  v("iterations", o.iterations);
+  v("min_step_rotation_rad", o.min_step_rotation_rad);
+  v("min_step_translation_m", o.min_step_translation_m);
+  v("max_dist_m", o.max_dist_m);
+  v("max_normal_angle_deg", o.max_normal_angle_deg);
+  v("robust_icp", o.robust_icp);
+  v("huber_icp_m", o.huber_icp_m);
+  v("robust_rgb", o.robust_rgb);
+  v("huber_rgb", o.huber_rgb);
+  v("t_dof", o.t_dof);
+  v("t_sigma_rgb_init", o.t_sigma_rgb_init);
+  v("t_sigma_rgb_min", o.t_sigma_rgb_min);
+  v("t_sigma_icp_m", o.t_sigma_icp_m);
+  v("rgb_weight", o.rgb_weight);
+  v("min_gradient", o.min_gradient);
+  v("photometric_occlusion_check", o.photometric_occlusion_check);
+  v("degeneracy_threshold", o.degeneracy_threshold);
+  v("min_inliers", o.min_inliers);
+  v("poor_inlier_ratio", o.poor_inlier_ratio);
+  v("max_translation_m", o.max_translation_m);
+  v("max_rotation_deg", o.max_rotation_deg);
+  v("max_final_step_translation_m", o.max_final_step_translation_m);
+  v("max_final_step_rotation_rad", o.max_final_step_rotation_rad);
+}
+template <class V>
+void visit_scalars(V&& v, PipelineConfig& c) {
+  v("registration", c.registration);
+  v("backend", c.backend);
+  v("tracking_level", c.tracking_level);
+  v("rgb_weight", c.rgb_weight);
+  v("constant_velocity", c.constant_velocity);
+  v("max_speed_m_per_s", c.max_speed_m_per_s);
+  v("max_angular_speed_deg_per_s", c.max_angular_speed_deg_per_s);
+  v("max_degenerate_dims", c.max_degenerate_dims);
+  v("integrate_poor", c.integrate_poor);
+  v("model_hint", c.model_hint);
+  v("min_overlap", c.min_overlap);
+  v("min_consistent", c.min_consistent);
+  v("stream_radius_m", c.stream_radius_m);
+}
+
+template <class S>
+nlohmann::json section_to_json(S& s) {
+  nlohmann::json j = nlohmann::json::object();
+  visit(ToJson{&j}, s);
+  return j;
+}
+
+template <class S>
+void section_from_json(const nlohmann::json& j, const std::string& where, S& s) {
+  if (!j.is_object()) throw Error(where + ": expected an object");
+  FromJson f{&j, where};
+  visit(f, s);
+  // Unknown keys are mistakes (a typo would otherwise silently keep the default).
+  nlohmann::json known = section_to_json(s);
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (!known.contains(it.key())) throw Error(where + ": unknown key '" + it.key() + "'");
+}
+
+}  // namespace
+
+RegistrationOptions effective_registration_options(const PipelineConfig& c) {
+  if (c.registration_options) return *c.registration_options;
+  RegistrationOptions o = default_registration_options(c.registration);
+  o.rgb_weight = c.rgb_weight;
+  return o;
+}
+
+
+// --- Configuration ----------------------------------------------------------------------------------------------
+
+void PipelineConfig::validate() const {
+  if (registration != "groundtruth") {
+    const auto names = registration_names();
+    if (std::find(names.begin(), names.end(), registration) == names.end()) {
+      std::string known = "groundtruth";
+      for (const auto& n : names) known += ", " + n;
+      throw Error("unknown registration method '" + registration + "' (known: " + known + ")");
+    }
+  }
+  volume.validate();
+  raycast.validate();
+  if (!(integrate.min_depth_m >= 0 && integrate.min_depth_m < integrate.max_depth_m &&
+        std::isfinite(integrate.max_depth_m)))
+    throw Error("integrate: need 0 <= min_depth_m < max_depth_m (finite)");
+  if (!(integrate.observation_weight > 0 && std::isfinite(integrate.observation_weight)))
+    throw Error("integrate.observation_weight must be positive");
+  if (pyramid.levels < 1 || pyramid.levels > 6) throw Error("pyramid.levels must be in [1, 6]");
+  if (tracking_level < 0 || tracking_level > 2) throw Error("tracking_level must be 0, 1 or 2");
+  if (!(rgb_weight >= 0 && std::isfinite(rgb_weight))) throw Error("rgb_weight must be finite and >= 0");
+  if (registration_options) registration_options->validate();
+  if (!(max_speed_m_per_s > 0)) throw Error("max_speed_m_per_s must be positive");
+  if (!(max_angular_speed_deg_per_s > 0)) throw Error("max_angular_speed_deg_per_s must be positive");
+  if (max_degenerate_dims < 0 || max_degenerate_dims > 6) throw Error("max_degenerate_dims must be in [0, 6]");
+  if (!(min_overlap >= 0 && min_overlap <= 1)) throw Error("min_overlap must be in [0, 1]");
+  if (!(min_consistent >= 0 && min_consistent <= 1)) throw Error("min_consistent must be in [0, 1]");
+  if (!(stream_radius_m >= 0) || !std::isfinite(stream_radius_m)) throw Error("stream_radius_m must be >= 0");
+}
+
+nlohmann::json config_to_json(const PipelineConfig& config) {
+  PipelineConfig c = config;  // the visitors take non-const references
+  nlohmann::json j = nlohmann::json::object();
+  visit_scalars(ToJson{&j}, c);
+  j["volume"] = section_to_json(c.volume);
+  j["integrate"] = section_to_json(c.integrate);
+  j["raycast"] = section_to_json(c.raycast);
+  j["pyramid"] = section_to_json(c.pyramid);
+  // Always write the options in force, so a report says exactly what ran.
+  RegistrationOptions r = c.registration == "groundtruth" ? RegistrationOptions{} : effective_registration_options(c);
+  j["registration_options"] = section_to_json(r);
+  return j;
+}
+
+PipelineConfig config_from_json(const nlohmann::json& j, const std::string& where) {
+  if (!j.is_object()) throw Error(where + ": expected a JSON object");
+  PipelineConfig c;
+  FromJson f{&j, where};
+  visit_scalars(f, c);
+  // The method first: the registration options start from its defaults.
+  static const char* sections[] = {"volume", "integrate", "raycast", "pyramid", "registration_options"};
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string& k = it.key();
+    if (std::find(std::begin(sections), std::end(sections), k) != std::end(sections)) continue;
+    nlohmann::json probe;
+    visit_scalars(ToJson{&probe}, c);
+    if (!probe.contains(k)) throw Error(where + ": unknown key '" + k + "'");
+  }
+  if (j.contains("volume")) section_from_json(j["volume"], where + ": volume", c.volume);
+  if (j.contains("integrate")) section_from_json(j["integrate"], where + ": integrate", c.integrate);
+  if (j.contains("raycast")) section_from_json(j["raycast"], where + ": raycast", c.raycast);
+  if (j.contains("pyramid")) section_from_json(j["pyramid"], where + ": pyramid", c.pyramid);
+  if (j.contains("registration_options") && !j["registration_options"].is_null()) {
+    RegistrationOptions r =
+        c.registration == "groundtruth" ? RegistrationOptions{} : effective_registration_options(c);
+    section_from_json(j["registration_options"], where + ": registration_options", r);
+    c.registration_options = r;
+  }
+  try {
+    c.validate();
+  } catch (const Error& e) {
+    throw Error(where + ": " + e.what());
+  }
+  return c;
+}
+
+PipelineConfig load_config(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open config file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_config(ss.str(), path);
+}
+
+PipelineConfig parse_config(const std::string& text, const std::string& path) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    // Turn the byte offset into a line number, as every other parser of ours reports.
+    size_t line = 1;
+    for (size_t i = 0; i < e.byte && i < text.size(); ++i) line += text[i] == '\n';
+    throw ParseError(path, line, "invalid JSON");
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path + ": invalid JSON (" + e.what() + ")");  // e.g. a number out of double range
+  }
+  return config_from_json(j, path);
+}
+
+}  // namespace hf::slam
