@@ -1,25 +1,26 @@
 // `hashfusion run`: the main job. A dataset (TUM or 7-Scenes folder, or synthetic:PRESET generated on the fly) goes
 // through the SLAM pipeline (slam/pipeline.h) and the outputs land in --out: trajectory.txt, mesh.ply, report.json,
-// report.md, render.png and, with ground truth, trajectory.png. Ctrl-C stops after the current frame and still
-// writes every output for the frames processed.
+// report.md, render.png and, with ground truth, trajectory.png. --out is checked writable before the first frame.
+// Ctrl-C or SIGTERM stops after the current frame, writes every output for the frames processed and exits 130 /
+// 143 (apps/interrupt.h); a full voxel block pool does the same and exits 1 naming the flag that raises it.
 #include <CLI/CLI.hpp>
-#include <atomic>
-#include <csignal>
+#include <unistd.h>
+
 #include <filesystem>
 #include <iostream>
 
 #include "apps/commands.h"
+#include "apps/interrupt.h"
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "datasets/synthetic_source.h"
+#include "fusion/voxel_block_grid.h"
 #include "io/dataset.h"
 #include "slam/pipeline.h"
 #include "slam/sequence_run.h"
 
 namespace hf::apps {
 namespace {
-
-std::atomic<bool> g_interrupted{false};
-extern "C" void on_sigint(int) { g_interrupted.store(true); }
 
 struct RunOptions {
   std::string input = "synthetic:room";
@@ -31,6 +32,7 @@ struct RunOptions {
   double voxel_m = 0.01;
   int tracking_level = -1;  // -1: the configuration's
   long max_frames = 0;  // 0 = all
+  size_t capacity_blocks = 0;  // 0: the configuration's
   int synthetic_frames = 90;
   std::uint64_t seed = 0;
 };
@@ -55,14 +57,28 @@ slam::PipelineConfig make_config(const RunOptions& o, const CLI::App& cmd) {
   if (o.config_file.empty() || cmd.count("--backend")) c.backend = o.backend;
   if (o.config_file.empty() || cmd.count("--voxel-m")) c.volume.voxel_m = o.voxel_m;
   if (o.tracking_level >= 0) c.tracking_level = o.tracking_level;
+  if (o.capacity_blocks > 0) c.volume.capacity_blocks = o.capacity_blocks;
   // A method change on the command line must not inherit another method's options from the file.
   if (cmd.count("--registration") && c.registration_options && !o.config_file.empty()) c.registration_options.reset();
   c.validate();
   return c;
 }
 
+// The pool grows on demand, so a capacity beyond the machine's memory would only fail deep into the run.
+void check_capacity_fits_memory(const slam::PipelineConfig& c) {
+  const double need = double(c.volume.capacity_blocks) * double(sizeof(fusion::VoxelBlock));
+  const double have = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGESIZE));
+  if (have > 0 && need > have)
+    throw Error("capacity of " + std::to_string(c.volume.capacity_blocks) + " voxel blocks needs " +
+                std::to_string(long(need / (1 << 20))) + " MiB, more than this machine's " +
+                std::to_string(long(have / (1 << 20))) + " MiB of memory (lower --capacity-blocks)");
+}
+
 void run(const RunOptions& o, const CLI::App& cmd) {
   const slam::PipelineConfig config = make_config(o, cmd);
+  check_capacity_fits_memory(config);
+  prepare_output_folder(o.out);  // before the first frame, not after the last
+  InterruptGuard guard;  // from here on Ctrl-C / SIGTERM end the loop and the outputs are still written
   std::unique_ptr<FrameSource> source = open_input(o);
   if (source->size() == 0) throw Error(o.input + ": the dataset has no frames");
   std::cerr << "input: " << source->name() << ", " << source->size() << " frames\n"
@@ -73,21 +89,19 @@ void run(const RunOptions& o, const CLI::App& cmd) {
 
   slam::RunControl control;
   control.max_frames = o.max_frames;
-  control.stop = &g_interrupted;
+  control.stop = guard.flag();
   control.progress_label = "run";
-  g_interrupted.store(false);
-  auto previous = std::signal(SIGINT, on_sigint);
-  slam::SequenceRun result;
-  try {
-    result = slam::run_sequence(*source, pipeline, control);
-  } catch (...) {
-    std::signal(SIGINT, previous);
-    throw;
+  const slam::SequenceRun result = slam::run_sequence(*source, pipeline, control);
+  if (result.frames.empty()) {
+    guard.exit_if_interrupted("before the first frame, nothing written");
+    if (!result.stopped_by.empty()) throw Error(o.input + ": " + result.stopped_by);
+    throw Error(o.input + ": no usable frames");
   }
-  std::signal(SIGINT, previous);
   if (result.interrupted)
     std::cerr << "interrupted: writing outputs for the " << result.frames.size() << " frames processed\n";
-  if (result.frames.empty()) throw Error(o.input + ": no usable frames");
+  if (!result.stopped_by.empty())
+    std::cerr << "stopped early (" << result.stopped_by << "): writing outputs for the " << result.frames.size()
+              << " frames processed\n";
 
   const slam::RunSummary summary = slam::summarize(result, pipeline, *source, o.input);
   const std::vector<std::string> written = slam::write_run_outputs(o.out, result, summary, pipeline, *source);
@@ -96,6 +110,12 @@ void run(const RunOptions& o, const CLI::App& cmd) {
   std::cout << "frames: " << summary.frames << " (" << summary.frames_lost << " lost, " << summary.frames_bad
             << " unreadable), " << summary.fps << " fps\n";
   if (const auto ate = summary.ate_rmse_m()) std::cout << "ATE RMSE: " << *ate << " m\n";
+  const std::string done = "outputs written for " + std::to_string(summary.frames) + " of " +
+                           std::to_string(source->size()) + " frames";
+  guard.exit_if_interrupted(done);
+  if (!result.stopped_by.empty())
+    throw Error(o.input + ": " + done + "; stopped at " + result.stopped_by + " (now --capacity-blocks " +
+                std::to_string(config.volume.capacity_blocks) + ")");
 }
 
 }  // namespace
@@ -112,10 +132,13 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--voxel-m", opts->voxel_m, "voxel size in metres")->check(CLI::Range(1e-4, 10.0))
       ->capture_default_str();
   cmd->add_option("--tracking-level", opts->tracking_level,
-                  "pyramid level tracking starts at (0 full, 1 half resolution); default: the configuration's")
+                  "pyramid level tracking starts at (0 full, 1 half, 2 quarter resolution); default: the configuration's")
       ->check(CLI::Range(0, 2));
   cmd->add_option("--camera", opts->camera, "camera preset name or camera file (default: chosen per dataset)");
   cmd->add_option("--config", opts->config_file, "JSON pipeline configuration (report.json's \"config\" form)");
+  cmd->add_option("--capacity-blocks", opts->capacity_blocks,
+                  "voxel block pool size, 4 KiB per block (default: the configuration's, 131072 = 512 MiB)")
+      ->check(CLI::Range(size_t(1), size_t(1) << 26));
   cmd->add_option("--max-frames", opts->max_frames, "stop after N frames (0 = all)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--synthetic-frames", opts->synthetic_frames, "frames of a synthetic: input")
       ->check(CLI::Range(1, 100000))

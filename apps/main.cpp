@@ -1,9 +1,12 @@
 // hashfusion: real-time RGB-D SLAM and 3D reconstruction. `hashfusion --help` lists the subcommands.
+// Exit status: 0 done, 1 bad input or arguments (one line on stderr naming the file), 2 internal error,
+// 130 / 143 interrupted by SIGINT / SIGTERM after writing every output for the work done (apps/interrupt.h).
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <iostream>
 
 #include "apps/commands.h"
+#include "apps/interrupt.h"
 #include "core/error.h"
 
 int main(int argc, char** argv) {
@@ -17,6 +20,9 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const hf::apps::Interrupted& e) {
+    std::cerr << "hashfusion: " << e.what() << "\n";
+    return e.exit_status();
   } catch (const hf::Error& e) {
     std::cerr << "hashfusion: " << e.what() << "\n";
     return 1;

@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <iomanip>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "core/atomic_file.h"
+#include "core/bounded_read.h"
 #include "core/error.h"
 
 namespace hf {
@@ -112,12 +112,12 @@ PinholeCamera PinholeCamera::parse(const std::string& text, const std::string& f
       std::string key;
       if (!(ls >> key)) continue;
       double value;
-      if (!(ls >> value) || !std::isfinite(value)) throw ParseError(file, lineno, "expected '" + key + " <number>', got '" + line + "'");
+      if (!(ls >> value) || !std::isfinite(value)) throw ParseError(file, lineno, "expected " + quote_for_message(key + " <number>") + ", got " + quote_for_message(line));
       std::string rest;
-      if (ls >> rest) throw ParseError(file, lineno, "expected one value after '" + key + "', got '" + rest + "'");
+      if (ls >> rest) throw ParseError(file, lineno, "expected one value after " + quote_for_message(key) + ", got " + quote_for_message(rest));
       static const char* keys[] = {"fx", "fy", "cx", "cy", "width", "height"};
       if (std::find(std::begin(keys), std::end(keys), key) == std::end(keys))
-        throw ParseError(file, lineno, "expected one of fx fy cx cy width height, got '" + key + "'");
+        throw ParseError(file, lineno, "expected one of fx fy cx cy width height, got " + quote_for_message(key));
       values[key] = value;
     }
     for (const char* key : {"fx", "fy", "cx", "cy", "width", "height"}) {
@@ -138,11 +138,7 @@ PinholeCamera PinholeCamera::parse(const std::string& text, const std::string& f
 }
 
 PinholeCamera PinholeCamera::load(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot open camera file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse(ss.str(), path);
+  return parse(read_regular_file(path, "camera file"), path);
 }
 
 void PinholeCamera::save(const std::string& path) const {

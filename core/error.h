@@ -3,6 +3,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace hf {
 
@@ -23,5 +24,10 @@ class ParseError : public Error {
   std::string file_;
   int line_;
 };
+
+// (A prefix of) untrusted text for a message, the one way every parser quotes input: printable ASCII only ('?' for
+// the rest, so no terminal escape sequence reaches the terminal), at most 40 characters (then "..."), in single
+// quotes. A 10 MB token yields a 45-character quote.
+std::string quote_for_message(std::string_view text);
 
 }  // namespace hf

@@ -1,5 +1,6 @@
 #include "slam/sequence_run.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -56,7 +57,13 @@ SequenceRun run_sequence(FrameSource& source, Pipeline& pipeline, const RunContr
       if (progress) progress->update(read, "bad frame");
       continue;
     }
-    FrameResult r = pipeline.process(fr.frame);
+    FrameResult r;
+    try {
+      r = pipeline.process(fr.frame);
+    } catch (const fusion::CapacityError& e) {
+      run.stopped_by = "frame " + std::to_string(fr.frame.index) + ": " + e.what();
+      break;
+    }
     r.ms.read = read_ms;
     busy_ms += r.ms.total();
     if (control.on_frame) control.on_frame(r);
@@ -157,6 +164,7 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
   j["frames_degenerate"] = s.frames_degenerate;
   j["frames_poor"] = s.frames_poor;
   j["interrupted"] = s.interrupted;
+  j["stopped_by"] = run.stopped_by.empty() ? nlohmann::json(nullptr) : nlohmann::json(run.stopped_by);
   j["ate_rmse_m"] = opt(s.ate_rmse_m());
   j["rpe_trans_m_per_s"] = opt(s.rpe_trans_m_per_s());
   j["rpe_rot_deg_per_s"] = opt(s.rpe_rot_deg_per_s());
@@ -204,7 +212,8 @@ std::string report_markdown(const RunSummary& s, const SequenceRun& run, const F
      << "| voxel | " << fmt(s.voxel_m * 1000.0, 1) << " mm |\n"
      << "| frames | " << s.frames << " processed, " << s.frames_bad << " unreadable, " << s.frames_lost << " lost, "
      << s.frames_degenerate << " degenerate, " << s.frames_poor << " poor"
-     << (s.interrupted ? " (interrupted)" : "") << " |\n"
+     << (s.interrupted ? " (interrupted)" : "") << (run.stopped_by.empty() ? "" : " (stopped early: " + run.stopped_by + ")")
+     << " |\n"
      << "| speed | " << fmt(s.fps, 1) << " fps (" << fmt(s.mean_ms.total(), 1) << " ms per frame) |\n"
      << "| map | " << s.blocks_allocated << " blocks, " << fmt(double(s.memory_bytes) / (1 << 20), 1) << " MiB, "
      << fmt(s.bytes_per_voxel, 2) << " bytes per voxel |\n\n"
@@ -231,50 +240,58 @@ std::string report_markdown(const RunSummary& s, const SequenceRun& run, const F
 
 }  // namespace
 
+const std::vector<std::string>& run_output_names() {
+  static const std::vector<std::string> names = {"trajectory.txt", "mesh.ply",    "report.json",
+                                                 "report.md",      "render.png", "trajectory.png"};
+  return names;
+}
+
 std::vector<std::string> write_run_outputs(const std::string& dir, const SequenceRun& run, const RunSummary& summary,
                                            const Pipeline& pipeline, const FrameSource& source) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec || !std::filesystem::is_directory(dir)) throw Error(dir + ": cannot create output folder");
+  // Decide the whole set first, so report.json can list it and stale files of ours can go.
+  ColorImage shaded;
+  if (const auto pose = pipeline.last_good_pose()) shaded = pipeline.render(*pose);
+  const std::optional<EvalResult> eval = try_evaluate(source.ground_truth(), run.estimate());
+  std::vector<std::string> names = {"trajectory.txt", "mesh.ply", "report.json", "report.md"};
+  if (!shaded.empty()) names.push_back("render.png");
+  if (eval) names.push_back("trajectory.png");
   std::vector<std::string> written;
+  auto path_of = [&](const std::string& name) { return dir + "/" + name; };
 
-  const std::string traj = dir + "/trajectory.txt";
-  write_tum_trajectory(traj, run.estimate(),
+  write_tum_trajectory(path_of("trajectory.txt"), run.estimate(),
                        "hashfusion run --registration " + summary.registration + "\ninput: " + summary.input);
-  written.push_back(traj);
+  written.push_back(path_of("trajectory.txt"));
 
-  const std::string mesh_path = dir + "/mesh.ply";
   PlyWriteOptions ply;
   ply.comment = "hashfusion " + summary.registration + " on " + summary.input;
-  write_ply(mesh_path, pipeline.extract_mesh(), ply);
-  written.push_back(mesh_path);
+  write_ply(path_of("mesh.ply"), pipeline.extract_mesh(), ply);
+  written.push_back(path_of("mesh.ply"));
 
-  const std::string json_path = dir + "/report.json";
-  const nlohmann::json j = summary_to_json(summary, run, pipeline, source);
-  write_file_atomically(json_path, [&](std::ostream& out) { out << j.dump(2) << "\n"; });
-  written.push_back(json_path);
+  nlohmann::json j = summary_to_json(summary, run, pipeline, source);
+  j["outputs"] = names;
+  write_file_atomically(path_of("report.json"), [&](std::ostream& out) { out << j.dump(2) << "\n"; });
+  written.push_back(path_of("report.json"));
 
-  const std::string md_path = dir + "/report.md";
   const std::string md = report_markdown(summary, run, source);
-  write_file_atomically(md_path, [&](std::ostream& out) { out << md; });
-  written.push_back(md_path);
+  write_file_atomically(path_of("report.md"), [&](std::ostream& out) { out << md; });
+  written.push_back(path_of("report.md"));
 
-  if (const auto pose = pipeline.last_good_pose()) {
-    const std::string render_path = dir + "/render.png";
-    const ColorImage shaded = pipeline.render(*pose);
-    if (!shaded.empty()) {
-      write_color_png(render_path, shaded);
-      written.push_back(render_path);
-    }
+  if (!shaded.empty()) {
+    write_color_png(path_of("render.png"), shaded);
+    written.push_back(path_of("render.png"));
   }
-
-  if (auto eval = try_evaluate(source.ground_truth(), run.estimate())) {
-    const std::string plot = dir + "/trajectory.png";
+  if (eval) {
     TrajectoryPlotOptions o;
     o.title = "hashfusion " + summary.registration + ": " + summary.input;
-    write_trajectory_plot(plot, source.ground_truth(), run.estimate(), *eval, o);
-    written.push_back(plot);
+    write_trajectory_plot(path_of("trajectory.png"), source.ground_truth(), run.estimate(), *eval, o);
+    written.push_back(path_of("trajectory.png"));
   }
+  // An earlier run's render.png or trajectory.png beside this run's outputs would describe another run.
+  for (const std::string& name : run_output_names())
+    if (std::find(names.begin(), names.end(), name) == names.end()) std::filesystem::remove(path_of(name), ec);
   return written;
 }
 

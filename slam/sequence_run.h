@@ -36,6 +36,9 @@ struct SequenceRun {
   std::vector<FrameResult> frames;        // processed (decoded) frames, in order; `read` ms filled in
   std::vector<std::string> bad_frames;    // one line per unreadable frame, naming the file
   bool interrupted = false;               // stopped by RunControl::stop
+  // Non-empty when the loop ended early on a resource limit (the voxel block pool full, fusion::CapacityError):
+  // the message; the frames before it are kept and are written like an interrupted run's.
+  std::string stopped_by;
   double wall_s = 0.0;                    // the whole loop
 
   long frames_lost() const;
@@ -74,7 +77,12 @@ nlohmann::json summary_to_json(const RunSummary& summary, const SequenceRun& run
 
 // Writes into `dir` (created if needed), each file atomically: trajectory.txt, mesh.ply (binary, coloured),
 // report.json, report.md, render.png (shaded model from the last good pose) and trajectory.png (with ground
-// truth). Returns the paths written, in that order.
+// truth). report.json's "outputs" lists the file names of this set; a file of ours (run_output_names()) that this
+// run does not write, left by an earlier run into the same folder, is removed. Returns the paths written, in
+// that order.
+// Every file name write_run_outputs may write.
+const std::vector<std::string>& run_output_names();
+
 std::vector<std::string> write_run_outputs(const std::string& dir, const SequenceRun& run, const RunSummary& summary,
                                            const Pipeline& pipeline, const FrameSource& source);
 
