@@ -1,0 +1,31 @@
+// `thumbnail`: the plain baseline appearance code. Each keyframe keeps its normalised thumbnail
+// (slam/appearance/thumbnails.h: 40x30 intensity + 40x30 depth, each zero-mean and unit-norm); a query is the
+// sum of squared differences to every stored thumbnail (the "tiny image" baseline of Glocker et al. 2015).
+// distance in [0, 4 (1 + depth_weight^2)]. Query cost O(size() * length), memory length * 4 bytes per keyframe.
+#pragma once
+
+#include "slam/appearance.h"
+#include "slam/appearance/thumbnails.h"
+
+namespace hf::slam {
+
+struct ThumbnailIndexOptions {
+  ThumbnailOptions thumbnail{};
+};
+
+class ThumbnailIndex : public AppearanceIndex {
+ public:
+  explicit ThumbnailIndex(const ThumbnailIndexOptions& options = {});  // hf::Error for bad options
+  std::string name() const override { return "thumbnail"; }
+  void add(size_t id, const ColorImage& colour, const DepthImage& depth) override;
+  std::vector<AppearanceMatch> query(const ColorImage& colour, const DepthImage& depth, size_t k) const override;
+  size_t size() const override { return ids_.size(); }
+  size_t bytes_per_keyframe() const override { return options_.thumbnail.length() * sizeof(float); }
+
+ private:
+  ThumbnailIndexOptions options_;
+  std::vector<size_t> ids_;
+  std::vector<float> thumbnails_;  // size() rows of length()
+};
+
+}  // namespace hf::slam
