@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
+#include "core/bounded_read.h"
 #include "core/error.h"
 #include "io/prefetch.h"
 #include "io/seven_scenes.h"
@@ -35,14 +35,7 @@ std::string folder_name(const std::string& folder) {
 }  // namespace
 
 std::string read_text_file(const std::string& path, const std::string& what) {
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) throw Error(path + ": cannot read " + what + " (it is a folder)");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot read " + what + " (missing or unreadable)");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw Error(path + ": cannot read " + what);
-  return ss.str();
+  return read_regular_file(path, what, kMaxTextFileBytes);
 }
 
 CameraChoice camera_from_option(const std::string& option) {

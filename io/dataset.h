@@ -69,7 +69,8 @@ DatasetFormat detect_dataset_format(const std::string& folder);
 // cleared). Never throws hf::Error.
 std::string load_frame_images(RgbdFrame& frame, const PinholeCamera& camera, const DepthDecoding& decoding);
 
-// Reads a whole text file; hf::Error "PATH: cannot read WHAT" when it cannot be opened.
+// Reads a whole text file: only a regular file of at most kMaxTextFileBytes (core/bounded_read.h), so a FIFO cannot
+// block and a link to /dev/zero cannot exhaust memory; hf::Error "PATH: cannot read WHAT: ..." otherwise.
 std::string read_text_file(const std::string& path, const std::string& what);
 
 // Opens the dataset at `path` (a folder) with the detected reader, wrapped in a PrefetchingSource unless

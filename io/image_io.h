@@ -7,6 +7,11 @@
 // Colour in memory is hf::ColorImage (RGB, R first). OpenCV decodes to BGR; these functions swap the channels,
 // so callers never see BGR.
 //
+// Loaders read only regular files of at most kMaxImageFileBytes (core/bounded_read.h: a FIFO or a device is
+// refused, never read) and decode by content, not by name: content whose format contradicts the extension (a JPEG
+// renamed .png) is refused, and so is a decoded type that does not fit the role (a colour image as depth, a 16-bit
+// single-channel depth map as colour). Writers encode PNG in memory whatever the name says and write the bytes
+// with write_file_atomically (core/atomic_file.h).
 // Failures: every loader throws hf::Error naming the file for a missing, unreadable, truncated or undecodable
 // image, or one with an unsupported pixel type (e.g. an 8-bit "depth" image). The dataset readers turn these
 // into bad_frame results; nothing here prints or aborts.
@@ -31,8 +36,8 @@ struct DepthDecoding {
 // non-positive or non-finite scale.
 DepthImage load_depth(const std::string& path, const DepthDecoding& decoding = {});
 
-// Loads a colour image (PNG, JPEG, anything OpenCV reads; grey images are expanded, 16-bit ones reduced to
-// 8 bits) as RGB. Throws hf::Error (see above).
+// Loads a colour image (PNG, JPEG, anything OpenCV reads; grey images are expanded, 16-bit colour reduced to
+// 8 bits, alpha dropped) as RGB. Throws hf::Error (see above).
 ColorImage load_color(const std::string& path);
 
 // Converts raw 16-bit depth samples (row-major, width*height of them) to metres; exposed for tests and for

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/atomic_file.h"
+#include "core/bounded_read.h"
 #include "core/error.h"
 #include "io/text_util.h"
 
@@ -237,11 +238,7 @@ TriangleMesh parse_obj(std::string_view text, const std::string& file) {
 }
 
 TriangleMesh read_obj(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot open OBJ file");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw Error(path + ": read error");
-  return parse_obj(text, path);
+  return parse_obj(read_regular_file(path, "OBJ file", kMaxModelFileBytes), path);
 }
 
 std::string format_obj(const TriangleMesh& mesh, const ObjWriteOptions& options) {

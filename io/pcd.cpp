@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/atomic_file.h"
+#include "core/bounded_read.h"
 #include "core/error.h"
 
 namespace hf {
@@ -78,9 +79,7 @@ bool has_field(const pcl::PCLPointCloud2& blob, const char* name) {
 // fields PCL needs, consistent per-field lists, point counts that fit the bytes present.
 // Returns the number of points the header declares.
 std::uint64_t check_header(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot open PCD file");
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string bytes = read_regular_file(path, "PCD file", kMaxModelFileBytes);
   std::map<std::string, std::vector<std::string>> keys;
   std::map<std::string, int> key_line;
   size_t pos = 0;

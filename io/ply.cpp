@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "core/atomic_file.h"
+#include "core/bounded_read.h"
 #include "core/error.h"
 #include "io/text_util.h"
 
@@ -595,13 +596,7 @@ TriangleMesh parse(std::string_view bytes, const std::string& file, bool keep_fa
   return mesh;
 }
 
-std::string read_all(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot open PLY file");
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw Error(path + ": read error");
-  return bytes;
-}
+std::string read_all(const std::string& path) { return read_regular_file(path, "PLY file", kMaxModelFileBytes); }
 
 // ---------------------------------------------------------------------------------------------------------------
 // Writing. Bytes go to a buffer that is handed to the stream every MiB, so large meshes are not held twice.

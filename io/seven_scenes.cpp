@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "core/bounded_read.h"
 #include "core/error.h"
 
 namespace fs = std::filesystem;
@@ -25,6 +26,9 @@ std::vector<double> parse_number_grid(const std::string& text, const std::string
   int lineno = 0, row = 0;
   while (std::getline(in, line)) {
     ++lineno;
+    if (line.size() > kMaxLineBytes)
+      throw ParseError(name, lineno, "expected a line of at most " + std::to_string(kMaxLineBytes) + " bytes, got " +
+                                         std::to_string(line.size()));
     std::istringstream ls(line);
     std::string token;
     int n = 0;
@@ -34,7 +38,7 @@ std::vector<double> parse_number_grid(const std::string& text, const std::string
       char* end = nullptr;
       const double v = std::strtod(token.c_str(), &end);
       if (end == token.c_str() || *end != '\0' || !std::isfinite(v))
-        throw ParseError(name, lineno, "expected a finite number, got '" + token.substr(0, 40) + "'");
+        throw ParseError(name, lineno, "expected a finite number, got " + quote_for_message(token));
       values.push_back(v);
       ++n;
     }

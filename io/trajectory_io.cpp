@@ -3,12 +3,13 @@
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <iomanip>
 #include <sstream>
 
 #include "core/atomic_file.h"
+#include "core/bounded_read.h"
 #include "core/error.h"
+#include "io/text_util.h"
 
 namespace hf {
 namespace {
@@ -31,26 +32,35 @@ std::string format_timestamp(double t) {
 
 Trajectory parse_tum_trajectory(const std::string& text, const std::string& file) {
   Trajectory out;
-  std::istringstream in(text);
-  std::string line;
   int lineno = 0;
-  while (std::getline(in, line)) {
+  for (size_t pos = 0; pos < text.size();) {
+    size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    const std::string_view line(text.data() + pos, end - pos);
+    pos = end + 1;
     ++lineno;
-    const size_t first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream ls(line);
+    if (line.size() > kMaxLineBytes)
+      throw ParseError(file, lineno, "expected a line of at most " + std::to_string(kMaxLineBytes) + " bytes, got " +
+                                         std::to_string(line.size()));
+    const std::vector<std::string_view> words = split_words(line);
+    if (words.empty() || words[0][0] == '#') continue;
+    if (words.size() != 8)
+      throw ParseError(file, lineno, "expected 8 numbers 'timestamp tx ty tz qx qy qz qw', got " +
+                                         (words.size() > 8 ? std::string("more") : std::to_string(words.size())));
     double v[8];
-    int n = 0;
-    std::string token;
-    while (ls >> token) {
-      if (n == 8) throw ParseError(file, lineno, "expected 8 numbers 'timestamp tx ty tz qx qy qz qw', got more");
-      char* end = nullptr;
-      v[n] = std::strtod(token.c_str(), &end);
-      if (end == token.c_str() || *end != '\0' || !std::isfinite(v[n]))
-        throw ParseError(file, lineno, "expected a finite number, got '" + token + "'");
-      ++n;
+    for (int n = 0; n < 8; ++n) {
+      const std::string token(words[size_t(n)]);
+      char* stop = nullptr;
+      v[n] = std::strtod(token.c_str(), &stop);
+      if (stop == token.c_str() || *stop != '\0' || !std::isfinite(v[n]))
+        throw ParseError(file, lineno, "expected a finite number, got " + quote_for_message(token));
     }
-    if (n != 8) throw ParseError(file, lineno, "expected 8 numbers 'timestamp tx ty tz qx qy qz qw', got " + std::to_string(n));
+    if (!(std::fabs(v[0]) <= kMaxTimestampS))
+      throw ParseError(file, lineno, "expected a time stamp within 1e12 s, got " + quote_for_message(words[0]));
+    for (int k = 1; k <= 3; ++k)
+      if (!(std::fabs(v[k]) <= kMaxCoordinateM))
+        throw ParseError(file, lineno, "expected coordinates within 1e6 m (a physical bound), got " +
+                                           quote_for_message(words[size_t(k)]));
     // Scale by the largest component before normalising: q.norm() overflows to inf for components near 1e155
     // (normalising by it would then give a zero quaternion, i.e. NaN rotations) and underflows for tiny ones.
     Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
@@ -59,17 +69,16 @@ Trajectory parse_tum_trajectory(const std::string& text, const std::string& file
     q.coeffs() /= largest;
     if (!out.empty() && !(v[0] > out.back().timestamp_s))
       throw ParseError(file, lineno, "expected timestamps strictly increasing");
+    if (out.size() == kMaxTrajectoryPoses)
+      throw ParseError(file, lineno, "expected at most " + std::to_string(kMaxTrajectoryPoses) +
+                                         " poses (the trajectory limit), got more");
     out.push_back({v[0], SE3(q, Eigen::Vector3d(v[1], v[2], v[3]))});
   }
   return out;
 }
 
 Trajectory read_tum_trajectory(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot open trajectory file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_tum_trajectory(ss.str(), path);
+  return parse_tum_trajectory(read_regular_file(path, "trajectory file"), path);
 }
 
 std::string format_tum_trajectory(const Trajectory& trajectory, const std::string& header) {

@@ -3,6 +3,7 @@
 // world), as in TUM's groundtruth.txt.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -16,8 +17,17 @@ struct StampedPose {
 };
 using Trajectory = std::vector<StampedPose>;
 
-// Throws hf::ParseError "FILE:LINE: expected 8 numbers ..." for a malformed line, a non-finite value, a zero
-// quaternion, or a timestamp that is not strictly increasing (the readers and evaluation rely on sorted stamps).
+// Limits on untrusted trajectories: a coordinate beyond 1e6 m or a stamp beyond 1e12 s is no physical pose (and
+// would overflow the metrics' squares); a line over kMaxLineBytes (core/bounded_read.h) or more poses than
+// kMaxTrajectoryPoses (5.5 hours at 100 Hz, 128 MiB in memory) is refused, naming the limit.
+inline constexpr double kMaxCoordinateM = 1e6;
+inline constexpr double kMaxTimestampS = 1e12;
+inline constexpr size_t kMaxTrajectoryPoses = 2'000'000;
+
+// Throws hf::ParseError "FILE:LINE: expected 8 numbers ..." for a malformed line, a non-finite value, a value beyond
+// the limits above, a zero quaternion, or a timestamp that is not strictly increasing (the readers and evaluation
+// rely on sorted stamps). Offending tokens are quoted with quote_for_message (short, printable). read_tum_trajectory
+// reads only a regular file (core/bounded_read.h): a folder, FIFO or device is an hf::Error naming it.
 Trajectory read_tum_trajectory(const std::string& path);
 Trajectory parse_tum_trajectory(const std::string& text, const std::string& name_for_errors);
 

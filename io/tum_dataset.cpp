@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 
+#include "core/bounded_read.h"
 #include "core/error.h"
 #include "io/associate.h"
 
@@ -21,14 +22,6 @@ bool parse_double(const std::string& token, double& value) {
   return end != token.c_str() && *end == '\0' && std::isfinite(value);
 }
 
-// The line as it appears in messages: without the line ending, shortened so a binary blob cannot flood stderr.
-std::string quoted_line(const std::string& line) {
-  std::string s = line.substr(0, 80);
-  for (char& c : s)
-    if (static_cast<unsigned char>(c) < 0x20 && c != '\t') c = '?';
-  return "'" + s + (line.size() > 80 ? "...'" : "'");
-}
-
 }  // namespace
 
 std::vector<TumListEntry> parse_tum_list(const std::string& text, const std::string& name) {
@@ -38,6 +31,9 @@ std::vector<TumListEntry> parse_tum_list(const std::string& text, const std::str
   int lineno = 0;
   while (std::getline(in, line)) {
     ++lineno;
+    if (line.size() > kMaxLineBytes)
+      throw ParseError(name, lineno, "expected a line of at most " + std::to_string(kMaxLineBytes) + " bytes, got " +
+                                         std::to_string(line.size()));
     if (!line.empty() && line.back() == '\r') line.pop_back();
     const size_t first = line.find_first_not_of(" \t\r\v\f");
     if (first == std::string::npos || line[first] == '#') continue;
@@ -49,10 +45,13 @@ std::vector<TumListEntry> parse_tum_list(const std::string& text, const std::str
     std::string token;
     while (fields.size() < 3 && ls >> token) fields.push_back(token);
     if (fields.size() != 2)
-      throw ParseError(name, lineno, "expected 'timestamp filename', got " + quoted_line(line));
+      throw ParseError(name, lineno, "expected 'timestamp filename', got " + quote_for_message(line));
     double t = 0.0;
     if (!parse_double(fields[0], t))
-      throw ParseError(name, lineno, "expected a finite time stamp in seconds, got '" + fields[0].substr(0, 40) + "'");
+      throw ParseError(name, lineno, "expected a finite time stamp in seconds, got " + quote_for_message(fields[0]));
+    if (entries.size() == kMaxTumListEntries)
+      throw ParseError(name, lineno, "expected at most " + std::to_string(kMaxTumListEntries) +
+                                         " entries (the list limit), got more");
     entries.push_back({t, fields[1], lineno});
   }
   std::stable_sort(entries.begin(), entries.end(),

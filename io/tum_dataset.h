@@ -28,11 +28,16 @@ struct TumListEntry {
   int line = 0;      // 1-based line in the list file, for messages
 };
 
+// At most this many entries in one list (9 hours at 30 Hz); more is refused naming the limit.
+inline constexpr size_t kMaxTumListEntries = 1'000'000;
+
 // Parses an rgb.txt / depth.txt text. Entries come back sorted by time (stable). Throws hf::ParseError
 // "NAME:LINE: expected 'timestamp filename', got '...'" for a line without exactly two fields, a non-finite or
-// non-numeric time stamp, or a time stamp listed twice.
+// non-numeric time stamp, a time stamp listed twice, a line longer than kMaxLineBytes (core/bounded_read.h) or more
+// than kMaxTumListEntries entries. Input is quoted with quote_for_message (short, printable).
 std::vector<TumListEntry> parse_tum_list(const std::string& text, const std::string& name_for_errors);
-std::vector<TumListEntry> read_tum_list(const std::string& path);  // hf::Error when the file cannot be read
+// hf::Error when the file cannot be read or is not a regular file (read_text_file, io/dataset.h).
+std::vector<TumListEntry> read_tum_list(const std::string& path);
 
 // Ground truth at time t: interpolated between the samples bracketing t when one of them is within
 // max_difference_s of t; the single nearest sample when t lies outside the trajectory's span but within

@@ -2,6 +2,7 @@
 #include "io/image_io.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -209,4 +210,47 @@ TEST(ImageIo, WritesAreAtomicAndFailuresLeaveNothing) {
   EXPECT_FALSE(error_of([&] { hf::write_color_png(path, hf::ColorImage()); }).empty());
   EXPECT_FALSE(error_of([&] { hf::write_depth_png(path, hf::DepthImage(2, 2), 0.0); }).empty());
   EXPECT_FLOAT_EQ(hf::load_depth(path)(3, 3), 2.0f);  // failed writes left the old file alone
+}
+
+// Issue 14.10: decode by content, check the decoded type against the role.
+TEST(ImageIo, ContentDecidesAndMustMatchTheNameAndRole) {
+  TempDir dir("content");
+  const std::string jpg = dir / "c.jpg";
+  ASSERT_TRUE(cv::imwrite(jpg, cv::Mat(4, 4, CV_8UC3, cv::Scalar(10, 20, 30))));
+  EXPECT_EQ(hf::load_color(jpg).width(), 4);
+  const std::string renamed = dir / "c.png";
+  fs::rename(jpg, renamed);
+  const std::string e = error_of([&] { hf::load_color(renamed); });
+  EXPECT_NE(e.find(renamed + ": colour image holds JPEG data but its name says PNG"), std::string::npos) << e;
+  // A colour PNG as depth, a depth PNG as colour: refused by what they decode to.
+  const std::string colour = dir / "colour.png";
+  ASSERT_TRUE(cv::imwrite(colour, cv::Mat(4, 4, CV_16UC3, cv::Scalar(1000, 1000, 1000))));
+  EXPECT_NE(error_of([&] { hf::load_depth(colour); }).find("single-channel depth image, got 3 channels"), std::string::npos);
+  const std::string depth = dir / "depth.png";
+  hf::write_depth_png(depth, hf::DepthImage(4, 4, 1.0f));
+  EXPECT_NE(error_of([&] { hf::load_color(depth); }).find("16-bit single-channel image (a depth map?)"), std::string::npos);
+  // Alpha is dropped, not mistaken for a channel.
+  const std::string rgba = dir / "rgba.png";
+  ASSERT_TRUE(cv::imwrite(rgba, cv::Mat(2, 2, CV_8UC4, cv::Scalar(30, 20, 10, 128))));
+  const hf::ColorImage c = hf::load_color(rgba);
+  EXPECT_EQ(c(1, 1).r, 10);
+  EXPECT_EQ(c(1, 1).b, 30);
+}
+
+// Issue 14.7: images are opened only as regular files; the smaller item "--plot with no extension" came from
+// writers choosing the format by name: they now always write PNG.
+TEST(ImageIo, FifoIsRefusedAndWritersIgnoreTheName) {
+  TempDir dir("kinds");
+  const std::string fifo = dir / "f.png";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_NE(error_of([&] { hf::load_color(fifo); }).find("FIFO"), std::string::npos);
+  const std::string no_ext = dir / "plot";
+  hf::ColorImage c(3, 2);
+  c(2, 1) = hf::Rgb8{1, 2, 3};
+  hf::write_color_png(no_ext, c);
+  std::ifstream in(no_ext, std::ios::binary);
+  char magic[4] = {};
+  in.read(magic, 4);
+  EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+  EXPECT_EQ(hf::load_color(no_ext)(2, 1).b, 3);
 }

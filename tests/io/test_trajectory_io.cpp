@@ -106,3 +106,39 @@ TEST(TrajectoryIo, WriteIsAtomicAndReadNamesMissingFiles) {
   EXPECT_TRUE(contains(error_of([&] { hf::read_tum_trajectory(missing); }), missing));
   EXPECT_FALSE(error_of([&] { hf::write_tum_trajectory(dir / "no/such/dir.txt", t); }).empty());
 }
+
+// Issue 14.9: tx = 1e308 is finite but no physical pose; it made the ATE -nan. Coordinates beyond 1e6 m and stamps
+// beyond 1e12 s are refused with file and line.
+TEST(TrajectoryIo, CoordinatesAndStampsBeyondAPhysicalBoundAreRefused) {
+  EXPECT_TRUE(contains(error_of([] { hf::parse_tum_trajectory("1 0 0 0 0 0 0 1\n2 1e308 0 0 0 0 0 1\n", "gt.txt"); }),
+                       "gt.txt:2: expected coordinates within 1e6 m (a physical bound), got '1e308'"));
+  EXPECT_TRUE(contains(error_of([] { hf::parse_tum_trajectory("1 0 0 -1000001 0 0 0 1\n", "gt.txt"); }), "gt.txt:1:"));
+  EXPECT_TRUE(contains(error_of([] { hf::parse_tum_trajectory("1e300 0 0 0 0 0 0 1\n", "gt.txt"); }),
+                       "gt.txt:1: expected a time stamp within 1e12 s"));
+  const hf::Trajectory edge = hf::parse_tum_trajectory("1 1e6 -1e6 999999.5 0 0 0 1\n", "gt.txt");
+  ASSERT_EQ(edge.size(), 1u);
+  EXPECT_EQ(edge[0].T_world_camera.translation().x(), 1e6);
+}
+
+// Issue 14.8: the offending token used to be echoed whole (a 10 MB line) with its escape sequences.
+TEST(TrajectoryIo, OffendingTokenIsQuotedShortAndPrintable) {
+  std::string text = "1 0 0 0 0 0 0 1\n2 \x1b[31m";  // built by append: gcc 12 misreads operator+ here
+  text.append(1000, 'x').append(" 0 0 0 0 0 1\n");
+  const std::string msg = error_of([&] { hf::parse_tum_trajectory(text, "gt.txt"); });
+  EXPECT_TRUE(contains(msg, "gt.txt:2: expected a finite number, got '?[31mxxx")) << msg;
+  EXPECT_LT(msg.size(), 120u) << msg;
+  EXPECT_EQ(msg.find('\x1b'), std::string::npos);
+  std::string long_line = "1 0 0 0 0 0 0 1\n";
+  long_line.append(5000, ' ').append("2 0 0 0 0 0 0 1\n");
+  EXPECT_TRUE(contains(error_of([&] { hf::parse_tum_trajectory(long_line, "gt.txt"); }),
+                       "gt.txt:2: expected a line of at most 4096 bytes, got 5015"));
+}
+
+TEST(TrajectoryIo, ReadsOnlyRegularFiles) {
+  hf::test::TempDir dir("traj_kinds");
+  EXPECT_TRUE(contains(error_of([&] { hf::read_tum_trajectory(dir.str()); }), "a folder, not a regular file"));
+  if (std::filesystem::exists("/dev/zero")) {
+    std::filesystem::create_symlink("/dev/zero", dir / "zero.txt");
+    EXPECT_TRUE(contains(error_of([&] { hf::read_tum_trajectory(dir / "zero.txt"); }), "character device"));
+  }
+}

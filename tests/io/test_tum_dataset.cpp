@@ -2,9 +2,12 @@
 #include "io/tum_dataset.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cmath>
 #include <cstdio>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
 #include "core/error.h"
@@ -307,4 +310,41 @@ TEST(TumDataset, FolderLevelErrorsThrow) {
   bad.camera = "no-such-preset-or-file";
   TumFolder folder4;
   EXPECT_TRUE(contains(error_of([&] { hf::TumDataset d(folder4.dir.str(), bad); }), "no-such-preset-or-file"));
+}
+
+// Issue 14.7: a groundtruth.txt linked to /dev/zero was read until memory ran out; an rgb.txt FIFO blocked forever.
+TEST(TumDataset, ListsThatAreNotRegularFilesAreRefusedAtOnce) {
+  TumFolder zero;
+  if (std::filesystem::exists("/dev/zero")) {
+    std::filesystem::remove(zero.dir / "groundtruth.txt");
+    std::filesystem::create_symlink("/dev/zero", zero.dir / "groundtruth.txt");
+    const std::string e = error_of([&] { hf::TumDataset d(zero.dir.str()); });
+    EXPECT_TRUE(contains(e, "groundtruth.txt: cannot read trajectory file: it is a character device")) << e;
+  }
+  TumFolder fifo;
+  std::filesystem::remove(fifo.dir / "rgb.txt");
+  ASSERT_EQ(::mkfifo((fifo.dir / "rgb.txt").c_str(), 0600), 0);
+  const std::string e = error_of([&] { hf::TumDataset d(fifo.dir.str()); });
+  EXPECT_TRUE(contains(e, "rgb.txt: cannot read image list: it is a FIFO")) << e;
+}
+
+TEST(TumList, LongLinesAndTheirContentAreBounded) {
+  const std::string msg = error_of([] { hf::parse_tum_list("1 a\n" + std::string(5000, 'b') + "\n", "rgb.txt"); });
+  EXPECT_TRUE(contains(msg, "rgb.txt:2: expected a line of at most 4096 bytes")) << msg;
+  const std::string esc = error_of([] { hf::parse_tum_list("1 a b \x1b]0;title\x07\n", "rgb.txt"); });
+  EXPECT_TRUE(contains(esc, "rgb.txt:1: expected 'timestamp filename', got '1 a b ?]0;title?'")) << esc;
+}
+
+// Issue 14.10: a colour JPEG renamed .png was decoded, "tracked good" and fused. Content that contradicts the name
+// is a bad frame naming the file and both formats.
+TEST(TumDataset, ImageWhoseContentContradictsItsNameIsABadFrame) {
+  TumFolder folder;
+  const std::string jpeg = folder.dir / "rgb/2.jpg";
+  ASSERT_TRUE(cv::imwrite(jpeg, cv::Mat(kH, kW, CV_8UC3, cv::Scalar(10, 20, 30))));
+  std::filesystem::rename(jpeg, folder.dir / "rgb/2.png");
+  hf::TumDataset data(folder.dir.str());
+  const hf::FrameRead r = data.read(2);
+  EXPECT_EQ(r.status, hf::FrameStatus::bad_frame);
+  EXPECT_TRUE(contains(r.message, "rgb/2.png: colour image holds JPEG data but its name says PNG")) << r.message;
+  EXPECT_EQ(data.read(1).status, hf::FrameStatus::ok);
 }
