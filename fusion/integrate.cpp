@@ -82,16 +82,6 @@ void traverse(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::V
   }
 }
 
-void check_sizes(const DepthImage& depth, const ColorImage& colour, const PinholeCamera& camera) {
-  if (depth.width() != camera.width || depth.height() != camera.height)
-    throw Error("integrate: depth image is " + std::to_string(depth.width()) + "x" + std::to_string(depth.height()) +
-                " but the camera is " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
-  if (!colour.empty() && (colour.width() != depth.width() || colour.height() != depth.height()))
-    throw Error("integrate: colour image is " + std::to_string(colour.width()) + "x" +
-                std::to_string(colour.height()) + " but the depth image is " + std::to_string(depth.width()) + "x" +
-                std::to_string(depth.height()));
-}
-
 // True when some corner of the block lies in front of the camera and the corners' projections overlap the image.
 bool block_in_view(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw, const Eigen::Vector3d& origin_world,
                    double block_m, const PinholeCamera& camera) {
@@ -114,10 +104,24 @@ bool block_in_view(const Eigen::Matrix3d& R_cw, const Eigen::Vector3d& t_cw, con
 
 }  // namespace
 
+namespace detail {
+
+void check_frame_sizes(const DepthImage& depth, const ColorImage& colour, const PinholeCamera& camera) {
+  if (depth.width() != camera.width || depth.height() != camera.height)
+    throw Error("integrate: depth image is " + std::to_string(depth.width()) + "x" + std::to_string(depth.height()) +
+                " but the camera is " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  if (!colour.empty() && (colour.width() != depth.width() || colour.height() != depth.height()))
+    throw Error("integrate: colour image is " + std::to_string(colour.width()) + "x" +
+                std::to_string(colour.height()) + " but the depth image is " + std::to_string(depth.width()) + "x" +
+                std::to_string(depth.height()));
+}
+
+}  // namespace detail
+
 std::vector<BlockCoord> blocks_touched_by(const VolumeParams& volume, const DepthImage& depth,
                                           const PinholeCamera& camera, const SE3& T_world_camera,
                                           const IntegrateParams& params, size_t* pixels_used) {
-  check_sizes(depth, ColorImage(), camera);
+  detail::check_frame_sizes(depth, ColorImage(), camera);
   detail::BandFrame frame;
   const Eigen::Matrix3d R = T_world_camera.rotation();
   const Eigen::Vector3d t = T_world_camera.translation();
@@ -211,10 +215,103 @@ std::vector<BlockCoord> blocks_touched_by(const VolumeParams& volume, const Dept
   return coords;
 }
 
+namespace detail {
+
+void update_blocks(VoxelUpdate op, const VolumeParams& volume,
+                   const std::vector<std::pair<BlockCoord, VoxelBlock*>>& visible,
+                   const std::vector<std::uint8_t*>& surface_free, const DepthImage& depth, const ColorImage& colour,
+                   const PinholeCamera& camera, const SE3& T_world_camera, const IntegrateParams& params,
+                   IntegrateStats* stats) {
+  check_frame_sizes(depth, colour, camera);
+  const auto t0 = std::chrono::steady_clock::now();
+  const SE3 T_camera_world = T_world_camera.inverse();
+  const Eigen::Matrix3d R_cw = T_camera_world.rotation();
+  const Eigen::Vector3d t_cw = T_camera_world.translation();
+  const double voxel_m = volume.voxel_m;
+  // The camera-frame images of one voxel step along the world axes, shared by all blocks.
+  BlockFrame steps{};
+  for (int a = 0; a < 3; ++a) {
+    steps.s_x[a] = float(R_cw(a, 0) * voxel_m);
+    steps.s_y[a] = float(R_cw(a, 1) * voxel_m);
+    steps.s_z[a] = float(R_cw(a, 2) * voxel_m);
+  }
+  const hf_intrinsics K = camera.kernel_intrinsics();
+  const float mu = float(volume.truncation_m());
+  const float* depth_px = depth.data();
+  // Per-pixel point-to-plane factor (|cos theta| |(x/z, y/z, 1)|, 0 = unknown), from the shared kernel. Neighbours
+  // more than mu apart in depth are a depth edge: beyond the band the two surfaces' voxels do not mix.
+  std::vector<float> incidence;
+  if (params.point_to_plane) {
+    const auto t_inc = std::chrono::steady_clock::now();
+    const int W = depth.width();
+    incidence.resize(size_t(W) * depth.height());
+    parallel_for_rows(depth.height(), [&](int v) {
+      float* out = incidence.data() + size_t(v) * W;
+      for (int u = 0; u < W; ++u) out[u] = hf_point_to_plane_factor(depth_px, u, v, K, mu);
+    });
+    stats->incidence_ms = ms_since(t_inc);
+  }
+
+  FrameInputs frame;
+  frame.depth = depth_px;
+  frame.incidence = incidence.empty() ? nullptr : incidence.data();
+  frame.rgb = colour.empty() ? nullptr : reinterpret_cast<const hf_uint8*>(colour.data());
+  frame.K = K;
+  frame.mu = mu;
+  frame.max_weight = volume.max_weight;
+  frame.w = params.observation_weight;
+  const bool simd = cpu_has_avx2() && size_t(depth.width()) * size_t(depth.height()) >= 2;
+
+  tbb::combinable<size_t> updated([] { return size_t(0); });
+  tbb::combinable<size_t> in_view([] { return size_t(0); });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, visible.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    size_t n_updated = 0, n_view = 0;
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const BlockCoord& c = visible[i].first;
+      const Eigen::Vector3d origin_world = Eigen::Vector3d(c.x, c.y, c.z) * volume.block_m();
+      if (!block_in_view(R_cw, t_cw, origin_world, volume.block_m(), camera)) continue;
+      ++n_view;
+      BlockFrame b = steps;
+      const Eigen::Vector3f p0 =
+          (R_cw * (origin_world + Eigen::Vector3d::Constant(0.5 * voxel_m)) + t_cw).cast<float>();
+      for (int a = 0; a < 3; ++a) b.p0[a] = p0[a];
+      Voxel* voxels = visible[i].second->voxels.data();
+      if (op == VoxelUpdate::deintegrate) {
+        // Taking an observation out can move a voxel to either side of the surface: scan the block.
+        const int n = deintegrate_block(voxels, b, frame);
+        if (n > 0) *surface_free[i] = block_is_surface_free(*visible[i].second) ? 1 : 0;
+        n_updated += size_t(n);
+        continue;
+      }
+      bool wrote_surface = false;
+      const int n = simd ? update_block_avx2(voxels, b, frame, &wrote_surface)
+                         : update_block(voxels, b, frame, &wrote_surface);
+      // The raycast's block skip (VoxelBlockGrid::surface_free) for a block this frame changed: a voxel written on
+      // or behind a surface clears it; a block that was free and got only values in front of a surface stays free;
+      // otherwise (this frame may have carved the block's last surface voxel away) the block is scanned.
+      if (n > 0) {
+        std::uint8_t& flag = *surface_free[i];
+        if (wrote_surface)
+          flag = 0;
+        else if (flag == 0)
+          flag = block_is_surface_free(*visible[i].second) ? 1 : 0;
+      }
+      n_updated += size_t(n);
+    }
+    updated.local() += n_updated;
+    in_view.local() += n_view;
+  });
+  stats->update_ms = ms_since(t0);
+  stats->voxels_updated = updated.combine(std::plus<>());
+  stats->blocks_visible = in_view.combine(std::plus<>());
+}
+
+}  // namespace detail
+
 IntegrateStats integrate(VoxelBlockGrid& grid, const DepthImage& depth, const ColorImage& colour,
                          const PinholeCamera& camera, const SE3& T_world_camera, const IntegrateParams& params,
                          BlockStore* store) {
-  check_sizes(depth, colour, camera);
+  detail::check_frame_sizes(depth, colour, camera);
   IntegrateStats stats;
   const VolumeParams& volume = grid.params();
 
@@ -240,80 +337,8 @@ IntegrateStats integrate(VoxelBlockGrid& grid, const DepthImage& depth, const Co
   stats.allocate_ms = ms_since(t0);
 
   // Phase 2: per-voxel update, parallel over blocks.
-  t0 = std::chrono::steady_clock::now();
-  const SE3 T_camera_world = T_world_camera.inverse();
-  const Eigen::Matrix3d R_cw = T_camera_world.rotation();
-  const Eigen::Vector3d t_cw = T_camera_world.translation();
-  const double voxel_m = volume.voxel_m;
-  // The camera-frame images of one voxel step along the world axes, shared by all blocks.
-  detail::BlockFrame steps{};
-  for (int a = 0; a < 3; ++a) {
-    steps.s_x[a] = float(R_cw(a, 0) * voxel_m);
-    steps.s_y[a] = float(R_cw(a, 1) * voxel_m);
-    steps.s_z[a] = float(R_cw(a, 2) * voxel_m);
-  }
-  const hf_intrinsics K = camera.kernel_intrinsics();
-  const float mu = float(volume.truncation_m());
-  const float* depth_px = depth.data();
-  // Per-pixel point-to-plane factor (|cos theta| |(x/z, y/z, 1)|, 0 = unknown), from the shared kernel. Neighbours
-  // more than mu apart in depth are a depth edge: beyond the band the two surfaces' voxels do not mix.
-  std::vector<float> incidence;
-  if (params.point_to_plane) {
-    const auto t_inc = std::chrono::steady_clock::now();
-    const int W = depth.width();
-    incidence.resize(size_t(W) * depth.height());
-    parallel_for_rows(depth.height(), [&](int v) {
-      float* out = incidence.data() + size_t(v) * W;
-      for (int u = 0; u < W; ++u) out[u] = hf_point_to_plane_factor(depth_px, u, v, K, mu);
-    });
-    stats.incidence_ms = ms_since(t_inc);
-  }
-
-  detail::FrameInputs frame;
-  frame.depth = depth_px;
-  frame.incidence = incidence.empty() ? nullptr : incidence.data();
-  frame.rgb = colour.empty() ? nullptr : reinterpret_cast<const hf_uint8*>(colour.data());
-  frame.K = K;
-  frame.mu = mu;
-  frame.max_weight = volume.max_weight;
-  frame.w = params.observation_weight;
-  const bool simd = cpu_has_avx2() && size_t(depth.width()) * size_t(depth.height()) >= 2;
-
-  tbb::combinable<size_t> updated([] { return size_t(0); });
-  tbb::combinable<size_t> in_view([] { return size_t(0); });
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, visible.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
-    size_t n_updated = 0, n_view = 0;
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      const BlockCoord& c = visible[i].first;
-      const Eigen::Vector3d origin_world = Eigen::Vector3d(c.x, c.y, c.z) * volume.block_m();
-      if (!block_in_view(R_cw, t_cw, origin_world, volume.block_m(), camera)) continue;
-      ++n_view;
-      detail::BlockFrame b = steps;
-      const Eigen::Vector3f p0 =
-          (R_cw * (origin_world + Eigen::Vector3d::Constant(0.5 * voxel_m)) + t_cw).cast<float>();
-      for (int a = 0; a < 3; ++a) b.p0[a] = p0[a];
-      Voxel* voxels = visible[i].second->voxels.data();
-      bool wrote_surface = false;
-      const int n = simd ? detail::update_block_avx2(voxels, b, frame, &wrote_surface)
-                         : detail::update_block(voxels, b, frame, &wrote_surface);
-      // The raycast's block skip (VoxelBlockGrid::surface_free) for a block this frame changed: a voxel written on
-      // or behind a surface clears it; a block that was free and got only values in front of a surface stays free;
-      // otherwise (this frame may have carved the block's last surface voxel away) the block is scanned.
-      if (n > 0) {
-        std::uint8_t& flag = *surface_free[i];
-        if (wrote_surface)
-          flag = 0;
-        else if (flag == 0)
-          flag = block_is_surface_free(*visible[i].second) ? 1 : 0;
-      }
-      n_updated += size_t(n);
-    }
-    updated.local() += n_updated;
-    in_view.local() += n_view;
-  });
-  stats.update_ms = ms_since(t0);
-  stats.voxels_updated = updated.combine(std::plus<>());
-  stats.blocks_visible = in_view.combine(std::plus<>());
+  detail::update_blocks(detail::VoxelUpdate::integrate, volume, visible, surface_free, depth, colour, camera,
+                        T_world_camera, params, &stats);
   stats.blocks_total = grid.block_count();
   stats.memory_bytes = grid.memory_bytes();
   return stats;

@@ -25,6 +25,9 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
 
 #include "core/camera.h"
 #include "core/image.h"
@@ -79,5 +82,23 @@ IntegrateStats integrate(VoxelBlockGrid& grid, const DepthImage& depth, const Co
 std::vector<BlockCoord> blocks_touched_by(const VolumeParams& volume, const DepthImage& depth,
                                           const PinholeCamera& camera, const SE3& T_world_camera,
                                           const IntegrateParams& params = {}, size_t* pixels_used = nullptr);
+
+namespace detail {
+
+// What integrate() and deintegrate() (fusion/deintegrate.h) share. check_frame_sizes throws integrate's hf::Error for
+// a depth / colour / camera size mismatch. update_blocks is phase 2 alone on the blocks phase 1 touched
+// (blocks_touched_by), looked up by the caller with each block's surface_free flag (VoxelBlockGrid::allocate):
+// for every block in view, integrate's update (VoxelUpdate::integrate) or its inverse (VoxelUpdate::deintegrate:
+// hf_deintegrate_voxel_at, the same observations bit for bit), each changed block's flag kept. Fills stats'
+// voxels_updated, blocks_visible, update_ms and incidence_ms.
+void check_frame_sizes(const DepthImage& depth, const ColorImage& colour, const PinholeCamera& camera);
+enum class VoxelUpdate { integrate, deintegrate };
+void update_blocks(VoxelUpdate op, const VolumeParams& volume,
+                   const std::vector<std::pair<BlockCoord, VoxelBlock*>>& blocks,
+                   const std::vector<std::uint8_t*>& surface_free, const DepthImage& depth, const ColorImage& colour,
+                   const PinholeCamera& camera, const SE3& T_world_camera, const IntegrateParams& params,
+                   IntegrateStats* stats);
+
+}  // namespace detail
 
 }  // namespace hf::fusion

@@ -48,22 +48,29 @@ void band_row(const float* depth, int width, const double* ray_x, double ray_y, 
   }
 }
 
+// The camera-frame depth of each voxel of block row (y, z) and the pixel it projects to (-1: none); branch-free.
+void project_row(const BlockFrame& b, int y, int z, const hf_intrinsics& K, float pz[HF_BLOCK_SIZE],
+                 int pixel[HF_BLOCK_SIZE]) {
+  float p[3];
+  row_start(b, y, z, p);
+  float px[HF_BLOCK_SIZE], py[HF_BLOCK_SIZE];
+  for (int x = 0; x < HF_BLOCK_SIZE; ++x) {
+    px[x] = p[0] + float(x) * b.s_x[0];
+    py[x] = p[1] + float(x) * b.s_x[1];
+    pz[x] = p[2] + float(x) * b.s_x[2];
+  }
+  for (int x = 0; x < HF_BLOCK_SIZE; ++x) pixel[x] = hf_voxel_pixel(px[x], py[x], pz[x], K);
+}
+
 int update_block(Voxel* voxels, const BlockFrame& b, const FrameInputs& in, bool* wrote_surface) {
   int updated = 0;
   bool surface = false;
   for (int z = 0; z < HF_BLOCK_SIZE; ++z) {
     for (int y = 0; y < HF_BLOCK_SIZE; ++y) {
-      float p[3];
-      row_start(b, y, z, p);
       // Two passes: the projections (branch-free), then the voxels that land in the image.
-      float px[HF_BLOCK_SIZE], py[HF_BLOCK_SIZE], pz[HF_BLOCK_SIZE];
+      float pz[HF_BLOCK_SIZE];
       int pixel[HF_BLOCK_SIZE];
-      for (int x = 0; x < HF_BLOCK_SIZE; ++x) {
-        px[x] = p[0] + float(x) * b.s_x[0];
-        py[x] = p[1] + float(x) * b.s_x[1];
-        pz[x] = p[2] + float(x) * b.s_x[2];
-      }
-      for (int x = 0; x < HF_BLOCK_SIZE; ++x) pixel[x] = hf_voxel_pixel(px[x], py[x], pz[x], in.K);
+      project_row(b, y, z, in.K, pz, pixel);
       Voxel* row = voxels + hf_voxel_index(0, y, z);
       for (int x = 0; x < HF_BLOCK_SIZE; ++x) {
         if (pixel[x] >= 0 && hf_integrate_voxel_at(row + x, pz[x], pixel[x], in.depth, in.incidence, in.rgb, in.mu,
@@ -75,6 +82,22 @@ int update_block(Voxel* voxels, const BlockFrame& b, const FrameInputs& in, bool
     }
   }
   *wrote_surface = surface;
+  return updated;
+}
+
+int deintegrate_block(Voxel* voxels, const BlockFrame& b, const FrameInputs& in) {
+  int updated = 0;
+  for (int z = 0; z < HF_BLOCK_SIZE; ++z) {
+    for (int y = 0; y < HF_BLOCK_SIZE; ++y) {
+      float pz[HF_BLOCK_SIZE];
+      int pixel[HF_BLOCK_SIZE];
+      project_row(b, y, z, in.K, pz, pixel);
+      Voxel* row = voxels + hf_voxel_index(0, y, z);
+      for (int x = 0; x < HF_BLOCK_SIZE; ++x)
+        if (pixel[x] >= 0)
+          updated += hf_deintegrate_voxel_at(row + x, pz[x], pixel[x], in.depth, in.incidence, in.rgb, in.mu, in.w);
+    }
+  }
   return updated;
 }
 

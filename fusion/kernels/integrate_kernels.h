@@ -11,6 +11,7 @@
 // where the cap W_max (not in eq. 58) keeps the model able to follow slow changes. Colour is averaged with the
 // same weights, only for observations inside the truncation band (|eta| < mu), where the voxel is near the surface
 // the colour pixel shows; free-space observations (tsdf = 1) carve the SDF but leave colour alone.
+// Deintegration (hf_tsdf_downdate) takes a frame's observation back out of that average (fusion/deintegrate.h).
 #ifndef HF_FUSION_KERNELS_INTEGRATE_KERNELS_H
 #define HF_FUSION_KERNELS_INTEGRATE_KERNELS_H
 
@@ -105,17 +106,22 @@ HF_INLINE float hf_point_to_plane_factor(HF_GLOBAL const float* depth, int u, in
                                      inv_fx, inv_fy, max_jump_m);
 }
 
-// The per-voxel step once the voxel's pixel is known: z is the voxel centre's depth in the camera frame, idx the
-// pixel from hf_voxel_pixel (>= 0). incidence is 0 (projective TSDF) or the per-pixel map of
-// hf_point_to_plane_factor; with it, the observed signed distance is the point-to-plane distance eta * factor
-// (Bylow et al. 2013), or eta where the map holds 0 (unknown). Which voxels a frame updates and which get
-// colour is still decided by the projective eta (the frame allocated [d - mu, d + mu] along its rays; a voxel
-// more than mu behind the measured surface along the ray is hidden), so the truncation and the free space that is
-// never allocated are unchanged; only the value changes (still truncated to [-1, 1] of mu, still averaged by eqs.
-// 57-58 with weight w). Returns 1 when the voxel was updated, 0 when it was not observed.
-HF_INLINE int hf_integrate_voxel_at(HF_GLOBAL hf_voxel* voxel, float z, int idx, HF_GLOBAL const float* depth,
-                                    HF_GLOBAL const float* incidence, HF_GLOBAL const hf_uint8* rgb, float mu,
-                                    float max_weight, float w) {
+// What one frame observes at a voxel once the voxel's pixel is known (integrate's and deintegrate's shared
+// selection): z is the voxel centre's depth in the camera frame, idx the pixel from hf_voxel_pixel (>= 0).
+// incidence is 0 (projective TSDF) or the per-pixel map of hf_point_to_plane_factor; with it, the observed signed
+// distance is the point-to-plane distance eta * factor (Bylow et al. 2013), or eta where the map holds 0 (unknown).
+// Which voxels a frame updates and which get colour is still decided by the projective eta (the frame allocated
+// [d - mu, d + mu] along its rays; a voxel more than mu behind the measured surface along the ray is hidden), so the
+// truncation and the free space that is never allocated are unchanged; only the value changes (still truncated to
+// [-1, 1] of mu). Returns 1 and fills *obs when the frame observes the voxel, 0 when it does not.
+typedef struct {
+  float tsdf;        // normalised truncated signed distance, [-1, 1]
+  int colour_valid;  // 1 when the observation carries colour (rgb given and inside the band, eta < mu)
+  float r, g, b;     // the colour pixel, 0 .. 255, when colour_valid
+} hf_tsdf_observation;
+
+HF_INLINE int hf_observe_voxel_at(float z, int idx, HF_GLOBAL const float* depth, HF_GLOBAL const float* incidence,
+                                  HF_GLOBAL const hf_uint8* rgb, float mu, hf_tsdf_observation* obs) {
   float d = depth[idx];
   if (!(d > 0.0f) || !hf_isfinite(d)) return 0;
   float eta = d - z;
@@ -126,16 +132,89 @@ HF_INLINE int hf_integrate_voxel_at(HF_GLOBAL hf_voxel* voxel, float z, int idx,
     if (c > 0.0f) sdf = eta * c;
   }
   // The factor reaches |(x/z, y/z, 1)| > 1 for off-axis rays meeting a surface head-on: clamp at -1 as well.
-  float tsdf = sdf >= mu ? 1.0f : (sdf <= -mu ? -1.0f : sdf / mu);
-  int colour_valid = 0;
-  float r = 0.0f, g = 0.0f, b = 0.0f;
+  obs->tsdf = sdf >= mu ? 1.0f : (sdf <= -mu ? -1.0f : sdf / mu);
+  obs->colour_valid = 0;
+  obs->r = 0.0f;
+  obs->g = 0.0f;
+  obs->b = 0.0f;
   if (rgb != 0 && eta < mu) {
-    colour_valid = 1;
-    r = (float)rgb[3 * idx];
-    g = (float)rgb[3 * idx + 1];
-    b = (float)rgb[3 * idx + 2];
+    obs->colour_valid = 1;
+    obs->r = (float)rgb[3 * idx];
+    obs->g = (float)rgb[3 * idx + 1];
+    obs->b = (float)rgb[3 * idx + 2];
   }
-  *voxel = hf_tsdf_update(*voxel, tsdf, w, max_weight, colour_valid, r, g, b);
+  return 1;
+}
+
+// The per-voxel step of integrate: the observation (hf_observe_voxel_at) averaged in by eqs. 57-58 with weight w.
+// Returns 1 when the voxel was updated, 0 when it was not observed.
+HF_INLINE int hf_integrate_voxel_at(HF_GLOBAL hf_voxel* voxel, float z, int idx, HF_GLOBAL const float* depth,
+                                    HF_GLOBAL const float* incidence, HF_GLOBAL const hf_uint8* rgb, float mu,
+                                    float max_weight, float w) {
+  hf_tsdf_observation obs;
+  if (!hf_observe_voxel_at(z, idx, depth, incidence, rgb, mu, &obs)) return 0;
+  *voxel = hf_tsdf_update(*voxel, obs.tsdf, w, max_weight, obs.colour_valid, obs.r, obs.g, obs.b);
+  return 1;
+}
+
+// Deintegration (BundleFusion, Dai et al. 2017): the running average of eqs. 57-58 inverted, taking an observation
+// (tsdf, w, colour) that hf_tsdf_update added back out of the voxel v it is now part of:
+//   W_t = W_{t+1} - w,   D_t = (W_{t+1} D_{t+1} - w d_{t+1}) / W_t,   colour likewise (when the observation had
+// colour and the voxel holds some), and a voxel left with W_t <= 0 (as quantised) is reset to unobserved (all
+// zero). An unobserved voxel (weight 0: nothing of the frame is left in it) is returned as it is.
+// Exactness:
+// - while the update did not reach the cap (W_t + w <= W_max), this is its inverse up to the quantisation: the
+//   stored D_{t+1} is within half an sdf step of the exact average, so D_t is within (W_{t+1} / W_t) / 2 + 1/2
+//   steps of the voxel's earlier value (at most 1.5 steps for w <= W_t, e.g. every observation of weight 1 but the
+//   first); the weight is exact when W_t and w are multiples of 1/16;
+// - once the cap clipped the update (W_{t+1} = W_max < W_t + w), W_t is unknown; this takes the stored weight as
+//   if it were exact, which inverts the update that reached the cap (W_t = W_max - w), so
+//   hf_tsdf_update(hf_tsdf_downdate(v)) = v up to the quantisation (unless that inverse leaves [-1, 1] and is
+//   clamped), and a voxel at the cap whose previous value D_t was itself at the cap comes back as
+//   D_t + w^2 (D_t - d) / (W_max^2 - w^2) (|.| <= 2 w^2 / (W_max^2 - w^2), 1.2e-4 of mu for W_max = 128 and w = 1)
+//   with weight W_max - w instead of W_max (also where the update left it unchanged, e.g. saturated free space);
+// - colour: integrate gives the first colour sample of a voxel the full weight and later ones the SDF weight W_t,
+//   and the voxel does not store which frame gave its first colour. Taking the frame's colour out of a voxel whose
+//   first colour it was leaves the colour (c W_{t+1} - c_obs w) / W_t clamped to [0, 255] (c_obs itself when only
+//   carving observations came after it) rather than "no colour"; otherwise the colour is the inverse, within
+//   (W_{t+1} / W_t) / 2 + 1/2 of a unit.
+HF_INLINE hf_voxel hf_tsdf_downdate(hf_voxel v, float tsdf, float w, int colour_valid, float r, float g, float b) {
+  if (v.weight == 0) return v;
+  float W = hf_voxel_weight(v);
+  float W_old = W - w;
+  hf_uint16 weight_old = hf_quantise_weight(W_old);
+  hf_voxel out = v;
+  if (weight_old == 0) {
+    out.sdf = 0;
+    out.weight = 0;
+    out.r = 0;
+    out.g = 0;
+    out.b = 0;
+    out.flags = 0;
+    return out;
+  }
+  float inv = 1.0f / W_old;
+  out.sdf = hf_quantise_sdf((hf_voxel_sdf(v) * W - tsdf * w) * inv);
+  if (colour_valid && (v.flags & HF_VOXEL_FLAG_COLOUR)) {
+    float rr = ((float)v.r * W - r * w) * inv + 0.5f;
+    float gg = ((float)v.g * W - g * w) * inv + 0.5f;
+    float bb = ((float)v.b * W - b * w) * inv + 0.5f;
+    out.r = (hf_uint8)(rr > 255.0f ? 255.0f : (rr < 0.0f ? 0.0f : rr));
+    out.g = (hf_uint8)(gg > 255.0f ? 255.0f : (gg < 0.0f ? 0.0f : gg));
+    out.b = (hf_uint8)(bb > 255.0f ? 255.0f : (bb < 0.0f ? 0.0f : bb));
+  }
+  out.weight = weight_old;
+  return out;
+}
+
+// The per-voxel step of deintegrate: the same observation as hf_integrate_voxel_at taken back out
+// (hf_tsdf_downdate). Returns 1 when the frame observes the voxel and the voxel held weight, else 0.
+HF_INLINE int hf_deintegrate_voxel_at(HF_GLOBAL hf_voxel* voxel, float z, int idx, HF_GLOBAL const float* depth,
+                                      HF_GLOBAL const float* incidence, HF_GLOBAL const hf_uint8* rgb, float mu,
+                                      float w) {
+  hf_tsdf_observation obs;
+  if (voxel->weight == 0 || !hf_observe_voxel_at(z, idx, depth, incidence, rgb, mu, &obs)) return 0;
+  *voxel = hf_tsdf_downdate(*voxel, obs.tsdf, w, obs.colour_valid, obs.r, obs.g, obs.b);
   return 1;
 }
 
@@ -149,6 +228,16 @@ HF_INLINE int hf_integrate_voxel(HF_GLOBAL hf_voxel* voxel, hf_float4 p_cam, HF_
   int idx = hf_voxel_pixel(p_cam.x, p_cam.y, p_cam.z, K);
   if (idx < 0) return 0;
   return hf_integrate_voxel_at(voxel, p_cam.z, idx, depth, incidence, rgb, mu, max_weight, w);
+}
+
+// hf_integrate_voxel inverted (hf_deintegrate_voxel_at): the same arguments but the cap, which the inverse does not
+// need. Returns 1 when the voxel held an observation of the frame that was taken out, 0 otherwise.
+HF_INLINE int hf_deintegrate_voxel(HF_GLOBAL hf_voxel* voxel, hf_float4 p_cam, HF_GLOBAL const float* depth,
+                                   HF_GLOBAL const float* incidence, HF_GLOBAL const hf_uint8* rgb, hf_intrinsics K,
+                                   float mu, float w) {
+  int idx = hf_voxel_pixel(p_cam.x, p_cam.y, p_cam.z, K);
+  if (idx < 0) return 0;
+  return hf_deintegrate_voxel_at(voxel, p_cam.z, idx, depth, incidence, rgb, mu, w);
 }
 
 #endif
