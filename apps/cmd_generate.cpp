@@ -1,4 +1,6 @@
-// `hashfusion generate`: writes a synthetic RGB-D sequence with exact ground truth as a TUM RGB-D folder.
+// `hashfusion generate`: writes a synthetic RGB-D sequence with exact ground truth as a TUM RGB-D folder, with a
+// progress line. The folder appears whole or not at all (datasets/tum_writer.h); Ctrl-C or SIGTERM stops it, removes
+// the partial build and exits 130 / 143 (apps/interrupt.h), leaving any previous output as it was.
 #include <CLI/CLI.hpp>
 #include <cstdint>
 #include <filesystem>
@@ -7,8 +9,10 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/interrupt.h"
 #include "core/camera.h"
 #include "core/error.h"
+#include "core/progress.h"
 #include "datasets/presets.h"
 #include "datasets/synthetic_sequence.h"
 #include "datasets/tum_writer.h"
@@ -49,7 +53,14 @@ void run_generate(const GenerateArgs& a) {
   const datasets::SyntheticSequence sequence(options);  // validates preset and frame count
   datasets::TumWriteOptions write;
   write.overwrite = a.force;
+  InterruptGuard guard;
+  Progress progress("generate", sequence.size());
+  write.progress = [&](int done, int) {
+    progress.update(done);
+    guard.exit_if_interrupted("nothing written to " + a.out + " (the partial folder is removed)");
+  };
   datasets::write_tum_folder(sequence, a.out, write);
+  progress.finish();
   std::cout << "wrote " << sequence.size() << " frames of synthetic '" << a.preset << "' (seed " << a.seed
             << (a.no_noise ? ", no noise" : "") << ") to " << a.out << "\n";
 }
@@ -69,7 +80,7 @@ void add_generate_command(CLI::App& app) {
   cmd->add_option("--out", args->out, "Output folder (must not exist unless --force)")->required();
   cmd->add_option("--camera", args->camera, "Camera preset name or camera file (resolution and intrinsics)")->capture_default_str();
   cmd->add_flag("--no-noise", args->no_noise, "Exact depth and colour: no sensor model");
-  cmd->add_flag("--force", args->force, "Replace an existing output folder");
+  cmd->add_flag("--force", args->force, "Replace an existing output folder (only one a previous generate wrote)");
   cmd->callback([args] { run_generate(*args); });
 }
 

@@ -5,8 +5,12 @@
 //   DIR/camera.json   PinholeCamera::save
 // with T the time stamp printed with 6 decimals (frame i at i / 30 s). Colour and depth share stamps.
 //
-// The folder appears whole or not at all: everything is written into "DIR.tmp" (removed first if a previous run
-// left it behind), which is renamed to DIR at the end; on any failure DIR.tmp is removed and DIR is untouched.
+// The folder appears whole or not at all: everything is written into a fresh private folder beside DIR
+// (core/atomic_file.h make_private_folder_beside: ".DIR.XXXXXX", so nothing of anyone else's is touched), which
+// replaces DIR at the end in one exchange; on any failure or exception from `progress` it is removed and DIR is
+// untouched. Replacing (overwrite) is refused for the root, the working folder or one above it, a home folder, a
+// link, and any folder that does not look like a previous output (only the entries listed above, PNGs in rgb/ and
+// depth/).
 #pragma once
 
 #include <functional>
@@ -22,8 +26,8 @@ struct TumWriteOptions {
   std::function<void(int, int)> progress;
 };
 
-// Throws hf::Error naming the path: DIR exists (without overwrite), its parent cannot be written, a file cannot be
-// written, or the final rename fails.
+// Throws hf::Error naming the path: DIR exists (without overwrite) or may not be replaced (above), its parent cannot
+// be written, a file cannot be written, or the final exchange fails.
 void write_tum_folder(const SyntheticSequence& sequence, const std::string& dir, const TumWriteOptions& options = {});
 
 // "%.6f" of a time stamp, the TUM file-name and list format.

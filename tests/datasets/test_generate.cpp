@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -166,23 +168,71 @@ TEST_F(Generate, BadArgumentsGiveAClearError) {
   EXPECT_NE(m.find(bad), std::string::npos) << m;
   EXPECT_NE(m.find("cannot create"), std::string::npos) << m;
 
-  // An existing folder is not replaced without --force, and is with it.
-  fs::create_directories(root_ / "exists");
-  std::ofstream(root_ / "exists" / "keep.txt") << "keep";
+  // An existing output is not replaced without --force, and is with it.
   const std::string ex = (root_ / "exists").string();
+  run({"--frames", "2", "--out", ex, "--camera", camera_file_});
   m = error_of([&] { run({"--frames", "1", "--out", ex}); });
   EXPECT_NE(m.find("already exists"), std::string::npos) << m;
-  EXPECT_TRUE(fs::exists(root_ / "exists" / "keep.txt"));
   run({"--frames", "1", "--out", ex, "--force", "--camera", camera_file_});
   EXPECT_EQ(PinholeCamera::load(ex + "/camera.json"), small_camera_);
-  EXPECT_FALSE(fs::exists(root_ / "exists" / "keep.txt"));
-  EXPECT_TRUE(fs::exists(root_ / "exists" / "rgb.txt"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(root_ / "exists" / "rgb"), fs::directory_iterator{}), 1);
 
   m = error_of([&] { run({"--frames", "1", "--out", out, "--camera", "fr9"}); });
   EXPECT_NE(m.find("'fr9'"), std::string::npos) << m;
 
   // A missing --out is CLI11's required-option error.
   EXPECT_THROW(run({"--frames", "1"}), CLI::RequiredError);
+}
+
+// Issue 14.2: "generate --out . --force" deleted the folder's contents and then failed; an unrelated
+// "results.tmp" beside --out results was silently removed. Nothing but a previous output is ever replaced, and the
+// build happens in a private folder of generate's own making.
+TEST_F(Generate, ReplacesOnlyWhatAPreviousGenerateWrote) {
+  fs::create_directories(root_ / "mine");
+  std::ofstream(root_ / "mine" / "precious.txt") << "precious";
+  const std::string mine = (root_ / "mine").string();
+  std::string m = error_of([&] { run({"--frames", "1", "--out", mine, "--force", "--camera", camera_file_}); });
+  EXPECT_NE(m.find("does not look like an output of hashfusion generate (it holds 'precious.txt')"), std::string::npos)
+      << m;
+  // A previous output with one stranger in it is not ours either.
+  const std::string out = (root_ / "results").string();
+  run({"--frames", "1", "--out", out, "--camera", camera_file_});
+  std::ofstream(root_ / "results" / "rgb" / "notes.txt") << "mine";
+  m = error_of([&] { run({"--frames", "1", "--out", out, "--force", "--camera", camera_file_}); });
+  EXPECT_NE(m.find("'rgb/notes.txt'"), std::string::npos) << m;
+  fs::remove(root_ / "results" / "rgb" / "notes.txt");
+  // results.tmp, what the old writer used and removed, is someone else's now.
+  fs::create_directories(root_ / "results.tmp");
+  std::ofstream(root_ / "results.tmp" / "notes.txt") << "mine";
+  run({"--frames", "2", "--out", out, "--force", "--camera", camera_file_});
+  EXPECT_TRUE(fs::exists(root_ / "results.tmp" / "notes.txt"));
+  EXPECT_TRUE(fs::exists(root_ / "mine" / "precious.txt"));
+  // A link to a folder is not replaced (the folder it names would be).
+  fs::create_directory_symlink(root_ / "results", root_ / "link");
+  EXPECT_NE(error_of([&] { run({"--frames", "1", "--out", (root_ / "link").string(), "--force"}); }).find("not a folder"),
+            std::string::npos);
+  // Nothing is left behind: the listing is exactly what the test made.
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(root_)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"link", "mine", "results", "results.tmp", "small_camera.json"}));
+}
+
+TEST_F(Generate, RefusesTheWorkingFolderItsParentsTheRootAndHome) {
+  const fs::path cwd = fs::current_path();
+  fs::create_directories(root_ / "work" / "sub");
+  fs::current_path(root_ / "work" / "sub");
+  std::ofstream("precious.txt") << "precious";
+  for (const std::string& out : {std::string("."), std::string(".."), std::string("./"), std::string("/")}) {
+    const std::string m = error_of([&] { run({"--frames", "1", "--out", out, "--force"}); });
+    EXPECT_NE(m.find("refusing to replace"), std::string::npos) << out << ": " << m;
+  }
+  fs::current_path(cwd);
+  EXPECT_TRUE(fs::exists(root_ / "work" / "sub" / "precious.txt"));
+  if (const char* home = std::getenv("HOME"); home && fs::is_directory(home)) {
+    const std::string m = error_of([&] { run({"--frames", "1", "--out", home, "--force"}); });
+    EXPECT_NE(m.find("refusing to replace the home folder"), std::string::npos) << m;
+  }
 }
 
 }  // namespace
