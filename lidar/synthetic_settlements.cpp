@@ -51,8 +51,7 @@ SyntheticSettlements synthetic_settlements(const SyntheticSettlementOptions& o) 
   const int w = out.grid.width, hgt = out.grid.height;
   out.footprints = Image<std::uint8_t>(w, hgt, 0);
   out.classes = Image<std::uint8_t>(w, hgt, 0);
-  // The thresholds between the classes' cluster areas at t = 2 (in cells: about 560, 5000-6100, 18000-25000,
-  // 45000-73000 for the layout above), scaled to m^2.
+  // Thresholds between the classes' cluster areas at t = 2 (512, 5676, 23474, 68544 cells), scaled to m^2.
   out.areas = AreaThresholds{1500 * r * r, 10000 * r * r, 35000 * r * r};
   std::vector<float> roof(size_t(w) * hgt, 0.0f);  // height above ground per building cell (metres)
 
