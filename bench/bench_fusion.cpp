@@ -2,6 +2,9 @@
 //
 //   BM_Integrate/<voxel mm>   one integrate() per iteration, frames cycling through the sequence after a warm-up
 //                             of kWarmupFrames frames (so the map is in steady state: most blocks already exist).
+//   BM_Deintegrate/<voxel mm> one deintegrate() per iteration (fusion/deintegrate.h) on the same map after every frame
+//                             of the cycle was fused: a fused frame is taken out, then fused back untimed (so the
+//                             map stays the same); counters split it into find / update / release ms.
 //   BM_StreamCopy             STREAM "copy" a[i] = b[i] over 2 x 256 MiB in parallel on all cores: the machine's
 //                             memory bandwidth, counted as 2 x 8 bytes per element like STREAM.
 //
@@ -21,6 +24,7 @@
 #include <vector>
 
 #include "datasets/synthetic_sequence.h"
+#include "fusion/deintegrate.h"
 #include "fusion/integrate.h"
 
 namespace {
@@ -127,6 +131,42 @@ void BM_Integrate(benchmark::State& state) {
   state.counters["update_bw_fraction"] = voxels_processed * 16.0 / (update_ms * 1e-3) / bandwidth;
 }
 BENCHMARK(BM_Integrate)->Arg(10)->Arg(5)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+
+void BM_Deintegrate(benchmark::State& state) {
+  const auto& frames = room_frames();
+  hf::fusion::VolumeParams params;
+  params.voxel_m = double(state.range(0)) * 1e-3;
+  params.capacity_blocks = size_t(1) << 20;
+  hf::fusion::VoxelBlockGrid grid(params);
+  for (const auto& f : frames) hf::fusion::integrate(grid, f.depth, f.color, room_camera(), f.T_world_camera);
+  int next = kWarmupFrames;
+  double cpu_s = 0, find_ms = 0, update_ms = 0, release_ms = 0, updated = 0, visible = 0;
+  for (auto _ : state) {
+    const auto& f = frames[next];
+    next = next + 1 < kFrames ? next + 1 : kWarmupFrames;
+    const double cpu0 = process_cpu_s();
+    const hf::fusion::DeintegrateStats s =
+        hf::fusion::deintegrate(grid, f.depth, f.color, room_camera(), f.T_world_camera);
+    cpu_s += process_cpu_s() - cpu0;
+    state.PauseTiming();
+    hf::fusion::integrate(grid, f.depth, f.color, room_camera(), f.T_world_camera);
+    state.ResumeTiming();
+    find_ms += s.find_ms;
+    update_ms += s.update_ms;
+    release_ms += s.release_ms;
+    updated += double(s.voxels_updated);
+    visible += double(s.blocks_visible);
+  }
+  const double n = double(state.iterations());
+  state.counters["find_ms"] = find_ms / n;
+  state.counters["update_ms"] = update_ms / n;
+  state.counters["release_ms"] = release_ms / n;
+  state.counters["cpu_ms_all_threads"] = cpu_s * 1e3 / n;
+  state.counters["blocks_total"] = double(grid.block_count());
+  state.counters["blocks_visible/frame"] = visible / n;
+  state.counters["voxels_taken_out/frame"] = updated / n;
+}
+BENCHMARK(BM_Deintegrate)->Arg(10)->Arg(5)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 }  // namespace
 
