@@ -87,4 +87,22 @@ Mask rasterise_footprints(const std::vector<Polygon>& polygons, const Grid& grid
   return out;
 }
 
+Mask rasterise_coverage(const std::vector<Polygon>& polygons, const Grid& grid) {
+  double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+  for (const Polygon& p : polygons)
+    for (const Ring& ring : p.rings)
+      for (const auto& v : ring)
+        for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
+  Mask out(grid.width, grid.height, 0);
+  for (int row = 0; row < grid.height; ++row) {
+    const double y = grid.north() - (row + 0.5) * grid.cell_m;
+    if (y < lo[1] || y > hi[1]) continue;
+    for (int col = 0; col < grid.width; ++col) {
+      const double x = grid.west() + (col + 0.5) * grid.cell_m;
+      if (x >= lo[0] && x <= hi[0]) out(col, row) = 1;
+    }
+  }
+  return out;
+}
+
 }  // namespace hf::lidar

@@ -14,10 +14,13 @@ Scores scores_from_counts(std::int64_t tp, std::int64_t fp, std::int64_t fn) {
   return s;
 }
 
-Scores compare_masks(const Mask& result, const Mask& truth) {
-  if (result.width() != truth.width() || result.height() != truth.height()) throw Error("compare_masks: rasters differ in size");
+Scores compare_masks(const Mask& result, const Mask& truth, const Mask* where) {
+  if (result.width() != truth.width() || result.height() != truth.height() ||
+      (where && (where->width() != truth.width() || where->height() != truth.height())))
+    throw Error("compare_masks: rasters differ in size");
   std::int64_t tp = 0, fp = 0, fn = 0;
   for (size_t i = 0; i < result.size(); ++i) {
+    if (where && !where->pixels()[i]) continue;
     const bool r = result.pixels()[i] != 0, t = truth.pixels()[i] != 0;
     tp += r && t, fp += r && !t, fn += !r && t;
   }

@@ -22,8 +22,9 @@ struct Scores {
 // Scores from counts (eqs. 7-9).
 Scores scores_from_counts(std::int64_t tp, std::int64_t fp, std::int64_t fn);
 
-// Binary masks (e.g. the building raster S against rasterised cadastral footprints).
-Scores compare_masks(const Mask& result, const Mask& truth);
+// Binary masks (e.g. the building raster S against rasterised cadastral footprints), counting only the cells
+// where `where` is set (all cells when null).
+Scores compare_masks(const Mask& result, const Mask& truth, const Mask* where = nullptr);
 
 struct ClassValidation {
   std::array<Scores, kBuiltUpClasses> per_class;  // index = class - 1
