@@ -18,13 +18,13 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Share of the frame's depth that agrees with the model depth where it lands (see PipelineConfig::min_consistent):
-// (pixels sampled, pixels landing on the model, pixels agreeing).
+// Share of the frame's depth that agrees with a reference depth image where it lands (see
+// PipelineConfig::min_consistent): (pixels sampled, pixels landing on the reference, pixels agreeing).
 struct Consistency {
   long sampled = 0, overlap = 0, consistent = 0;
 };
 
-Consistency depth_consistency(const VertexMap& current, const fusion::RaycastResult& model, const PinholeCamera& cam,
+Consistency depth_consistency(const VertexMap& current, const DepthImage& reference_depth, const PinholeCamera& cam,
                               const SE3& T_ref_cur, double voxel_m) {
   const Eigen::Matrix3f R = T_ref_cur.rotation().cast<float>();
   const Eigen::Vector3f t = T_ref_cur.translation().cast<float>();
@@ -40,14 +40,25 @@ Consistency depth_consistency(const VertexMap& current, const fusion::RaycastRes
       const Eigen::Vector2d px = cam.project(p.cast<double>());
       const int u = int(std::lround(px.x())), w = int(std::lround(px.y()));
       if (u < 0 || w < 0 || u >= cam.width || w >= cam.height) continue;
-      const float d_model = model.depth(u, w);
-      if (!(d_model > 0.0f)) continue;
+      const float d_ref = reference_depth(u, w);
+      if (!(d_ref > 0.0f)) continue;
       ++c.overlap;
-      c.consistent += std::abs(d_model - p.z()) <= 3.0f * hf_kinect_axial_sigma_m(p.z()) + float(voxel_m);
+      c.consistent += std::abs(d_ref - p.z()) <= 3.0f * hf_kinect_axial_sigma_m(p.z()) + float(voxel_m);
     }
   }
   return c;
 }
+
+// The z of a vertex map as a depth image (0 where invalid).
+DepthImage depth_of(const VertexMap& v) {
+  DepthImage d(v.width(), v.height(), 0.0f);
+  for (int y = 0; y < v.height(); ++y)
+    for (int x = 0; x < v.width(); ++x)
+      if (v(x, y).w != 0.0f) d(x, y) = v(x, y).z;
+  return d;
+}
+
+double rotation_deg(const SE3& T) { return so3_log(T.rotation()).norm() * 180.0 / M_PI; }
 
 }  // namespace
 
@@ -56,33 +67,53 @@ const char* to_string(TrackState state) {
     case TrackState::initialised: return "initialised";
     case TrackState::tracked: return "tracked";
     case TrackState::recovered: return "recovered";
+    case TrackState::relocalised: return "relocalised";
+    case TrackState::odometry: return "odometry";
     case TrackState::lost: return "lost";
     case TrackState::groundtruth: return "groundtruth";
   }
   return "?";
 }
 
+
 // --- The pipeline -----------------------------------------------------------------------------------------------
 
-// Everything tracking aligns against, all in the camera frame of the last good pose.
+// Everything tracking aligns against, all in the camera frame of the last pose.
 struct Pipeline::Reference {
-  fusion::RaycastResult model;   // raycast of the map at the last good pose
+  fusion::RaycastResult model;   // raycast of the map at the last pose
   SE3 T_world_model;             // that pose
-  FramePyramid pyramid;          // model vertices/normals per level + the last good frame's intensity/gradients
+  FramePyramid pyramid;          // model vertices/normals per level + the last frame's intensity/gradients
   bool valid = false;
+};
+
+// What decide() concluded for one frame; applied by process() only after it is final.
+struct Pipeline::Verdict {
+  enum Action { integrate, odometry, lose } action = lose;
+  SE3 T_world_cur;
+  TrackState state = TrackState::lost;
+  std::optional<RegistrationResult> registration;
+  std::string method, why;
 };
 
 Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
     : config_(config), camera_(camera), tracking_camera_(camera.scaled(config.tracking_level)),
       grid_((config.validate(), config.volume)),
-      reference_(std::make_unique<Reference>()) {
-  if (config_.registration != "groundtruth") {
-    RegistrationOptions options = effective_registration_options(config_);
-    if (int(options.iterations.size()) > config_.pyramid.levels)
-      options.iterations.resize(size_t(config_.pyramid.levels));
-    config_.registration_options = options;
-    registration_ = make_registration(config_.registration, options, make_backend(config_.backend));
+      reference_(std::make_unique<Reference>()), keyframes_(config.keyframes) {
+  if (config_.registration == "groundtruth") return;
+  RegistrationOptions options = effective_registration_options(config_);
+  std::vector<int>& iterations = options.driver.iterations;
+  if (int(iterations.size()) > config_.pyramid.levels) iterations.resize(size_t(config_.pyramid.levels));
+  config_.registration_options = options;
+  registration_ = make_registration(config_.registration, options, make_backend(config_.backend));
+  if (!config_.fallback_registration.empty() && config_.fallback_registration != config_.registration) {
+    RegistrationOptions fo = default_registration_options(config_.fallback_registration);
+    fo.driver.iterations = iterations;
+    fallback_ = make_registration(config_.fallback_registration, fo, make_backend(config_.backend));
   }
+  if (config_.relocalisation.enabled)
+    appearance_ = make_appearance_index(config_.relocalisation.appearance.empty()
+                                            ? default_appearance_index_name()
+                                            : config_.relocalisation.appearance);
 }
 
 Pipeline::~Pipeline() = default;
@@ -92,8 +123,7 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
     throw Error((frame.depth_file.empty() ? "frame " + std::to_string(frame.index) : frame.depth_file) +
                 ": depth is " + std::to_string(frame.depth.width()) + "x" + std::to_string(frame.depth.height()) +
                 ", camera is " + std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
-  const bool has_color = !frame.color.empty();
-  if (has_color && (frame.color.width() != camera_.width || frame.color.height() != camera_.height))
+  if (!frame.color.empty() && (frame.color.width() != camera_.width || frame.color.height() != camera_.height))
     throw Error((frame.color_file.empty() ? "frame " + std::to_string(frame.index) : frame.color_file) +
                 ": colour size differs from the camera's");
   ++frames_;
@@ -101,144 +131,269 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
   r.index = frame.index;
   r.timestamp_s = frame.timestamp_s;
 
-  auto integrate_at = [&](const SE3& T) {
-    const auto t0 = std::chrono::steady_clock::now();
-    fusion::integrate(grid_, frame.depth, frame.color, camera_, T, config_.integrate, &store_);
-    if (config_.stream_radius_m > 0) fusion::stream_out(grid_, store_, T.translation(), config_.stream_radius_m);
-    r.ms.integrate = ms_since(t0);
-    r.integrated = true;
-  };
-  auto lose = [&](std::string why) {
-    ++lost_;
-    was_lost_ = true;
-    r.state = TrackState::lost;
-    r.pose_valid = false;
-    r.T_world_camera = last_good_.value_or(SE3());
-    r.message = std::move(why);
-    return r;
-  };
-
   if (!registration_) {  // groundtruth: fusion only
-    if (!frame.T_world_camera_gt) return lose("no ground-truth pose for this frame");
+    if (!frame.T_world_camera_gt) {
+      lose(&r, "no ground-truth pose for this frame");
+      return r;
+    }
     r.state = TrackState::groundtruth;
     r.T_world_camera = *frame.T_world_camera_gt;
     r.pose_valid = true;
-    integrate_at(r.T_world_camera);
-    last_good_ = r.T_world_camera;
-    last_good_time_s_ = frame.timestamp_s;
+    integrate(frame, r.T_world_camera, &r);
+    T_world_cur_ = r.T_world_camera;
+    last_time_s_ = frame.timestamp_s;
     return r;
   }
 
-  FramePyramid current;
-  {
-    const auto t0 = std::chrono::steady_clock::now();
-    FramePyramidOptions po = config_.pyramid;
-    po.first_level = config_.tracking_level;
-    current = build_frame_pyramid(frame.depth, has_color ? &frame.color : nullptr, camera_, po);
-    r.ms.preprocess = ms_since(t0);
+  FramePyramid current = preprocess(frame, &r);
+  if (!T_world_cur_ || !reference_->valid) {
+    initialise(frame, current, &r);
+    return r;
   }
+  Verdict v = track(current, frame.timestamp_s, &r);
+  if (v.action == Verdict::lose && appearance_ && !keyframes_.empty()) {
+    if (std::optional<Verdict> rv = relocalise(frame, current, &r)) v = std::move(*rv);
+  }
+  if (v.action == Verdict::lose) {
+    r.registration = std::move(v.registration);
+    lose(&r, v.why);
+    return r;
+  }
+  // The verdict is final: apply it.
+  const SE3 T_prev = *T_world_cur_;
+  r.state = v.state;
+  r.T_world_camera = v.T_world_cur;
+  r.pose_valid = true;
+  r.method = v.method;
+  r.message = v.why;
+  r.registration = std::move(v.registration);
+  const bool fuse = v.action == Verdict::integrate &&
+                    (config_.integrate_poor || !r.registration || r.registration->status != RegistrationStatus::poor);
+  if (fuse) integrate(frame, v.T_world_cur, &r);
+  raycast_reference(current, v.T_world_cur, r.integrated, &r);
+  // After a loss or a relocalisation the motion spans several frames: no prior for the next one, not a wrong one.
+  velocity_ = (lost_spell_ > 0 || v.state == TrackState::relocalised) ? SE3() : T_prev.inverse() * v.T_world_cur;
+  T_world_cur_ = v.T_world_cur;
+  last_time_s_ = frame.timestamp_s;
+  lost_spell_ = 0;
+  if (r.integrated) add_keyframe_if_due(frame, &r);
+  return r;
+}
 
-  // Accepting a pose: integrate, raycast the model there, and make this frame the photometric reference.
-  auto accept = [&](const SE3& T_world_cur, TrackState state) {
-    r.state = state;
-    r.T_world_camera = T_world_cur;
-    r.pose_valid = true;
-    const bool poor = r.registration && r.registration->status == RegistrationStatus::poor;
-    if (!poor || config_.integrate_poor) integrate_at(T_world_cur);
-    const auto t0 = std::chrono::steady_clock::now();
-    // The frame just integrated from this pose tells each ray where the surface is (fusion/raycast.h depth_hint):
-    // its depth at the tracking resolution, from the pyramid's vertices. Where the frame has no depth, the last
-    // model raycast moved to this pose (fusion::forward_project_depth) does: those rays would otherwise march
-    // their tile's whole depth range.
+FramePyramid Pipeline::preprocess(const RgbdFrame& frame, FrameResult* r) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  FramePyramidOptions po = config_.pyramid;
+  po.first_level = config_.tracking_level;
+  FramePyramid p = build_frame_pyramid(frame.depth, frame.color.empty() ? nullptr : &frame.color, camera_, po);
+  r->ms.preprocess = ms_since(t0);
+  return p;
+}
+
+// Places the first frame (or the first after the map lost its surface) and integrates it. A frame that leaves the
+// map without a surface to track against (no valid depth) does not count: the next frame initialises again.
+// Mid-sequence the pose stays where tracking left it: ground truth only ever places the very first frame.
+void Pipeline::initialise(const RgbdFrame& frame, FramePyramid& current, FrameResult* r) {
+  const SE3 T0 = T_world_cur_ ? *T_world_cur_ : frame.T_world_camera_gt.value_or(SE3());
+  integrate(frame, T0, r);
+  raycast_reference(current, T0, true, r);
+  if (!reference_->valid) {
+    lose(r, "no surface seen yet: the map cannot be initialised from this frame");
+    r->T_world_camera = T0;
+    return;
+  }
+  r->state = TrackState::initialised;
+  r->T_world_camera = T0;
+  r->pose_valid = true;
+  T_world_cur_ = T0;
+  last_time_s_ = frame.timestamp_s;
+  velocity_ = SE3();
+  lost_spell_ = 0;
+  add_keyframe_if_due(frame, r);
+}
+
+Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_s, FrameResult* r) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const SE3 guess = config_.constant_velocity && lost_spell_ == 0 ? velocity_ : SE3();
+  Verdict primary = decide(registration_->align(current, reference_->pyramid, guess), current, timestamp_s,
+                           config_.registration);
+  if (primary.action == Verdict::integrate || !fallback_) {
+    r->ms.track = ms_since(t0);
+    return primary;
+  }
+  Verdict fallback = decide(fallback_->align(current, reference_->pyramid, guess), current, timestamp_s,
+                            config_.fallback_registration);
+  r->ms.track = ms_since(t0);
+  if (fallback.action == Verdict::integrate) {
+    fallback.why = config_.registration + " rejected (" + primary.why + "); " + config_.fallback_registration +
+                   " accepted";
+    return fallback;
+  }
+  return primary.action == Verdict::odometry || fallback.action != Verdict::odometry ? primary : fallback;
+}
+
+Pipeline::Verdict Pipeline::decide(const RegistrationResult& reg, const FramePyramid& current, double timestamp_s,
+                                   const std::string& method) const {
+  Verdict v;
+  v.registration = reg;
+  v.method = method;
+  if (!reg.usable()) {
+    v.why = std::string("registration ") + hf::to_string(reg.status) + ": " + reg.message;
+    return v;
+  }
+  if (reg.degenerate_dims > config_.max_degenerate_dims) {
+    v.why = "registration degenerate in " + std::to_string(reg.degenerate_dims) + " directions (at most " +
+            std::to_string(config_.max_degenerate_dims) + " accepted)";
+    return v;
+  }
+  // Plausibility against the sensor clock; a frame rate of 30 Hz when stamps are missing or out of order.
+  double dt = timestamp_s - last_time_s_;
+  if (!(dt > 1e-6)) dt = 1.0 / 30.0;
+  const double speed = reg.T_ref_cur.translation().norm() / dt;
+  const double angular = rotation_deg(reg.T_ref_cur) / dt;
+  if (speed > config_.max_speed_m_per_s) {
+    v.why = "implausible motion: " + std::to_string(speed) + " m/s > max_speed_m_per_s " +
+            std::to_string(config_.max_speed_m_per_s);
+    return v;
+  }
+  if (angular > config_.max_angular_speed_deg_per_s) {
+    v.why = "implausible rotation: " + std::to_string(angular) + " deg/s > max_angular_speed_deg_per_s " +
+            std::to_string(config_.max_angular_speed_deg_per_s);
+    return v;
+  }
+  v.T_world_cur = reference_->T_world_model * reg.T_ref_cur;
+  const Consistency cons = depth_consistency(current.levels[0].vertices, reference_->model.depth, tracking_camera_,
+                                             reg.T_ref_cur, config_.volume.voxel_m);
+  if (cons.sampled > 0 && double(cons.overlap) >= config_.min_overlap * double(cons.sampled) &&
+      double(cons.consistent) < config_.min_consistent * double(cons.overlap)) {
+    v.why = "depth disagrees with the map: " + std::to_string(cons.consistent) + " of " +
+            std::to_string(cons.overlap) + " overlapping samples consistent (min_consistent " +
+            std::to_string(config_.min_consistent) + ")";
+    // While tracking, the pose keeps moving; after a loss only a consistent frame may end the spell.
+    if (lost_spell_ == 0) {
+      v.action = Verdict::odometry;
+      v.state = TrackState::odometry;
+    }
+    return v;
+  }
+  v.action = Verdict::integrate;
+  v.state = lost_spell_ > 0 ? TrackState::recovered : TrackState::tracked;
+  return v;
+}
+
+// Registers the lost frame against the keyframes its appearance retrieves (from the keyframe's own depth and
+// colour, identity start), keeps the candidate whose depth agrees best with that keyframe's, and accepts it only
+// if the frame's depth agrees with a raycast of the map at the candidate pose.
+std::optional<Pipeline::Verdict> Pipeline::relocalise(const RgbdFrame& frame, const FramePyramid& current,
+                                                      FrameResult* r) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Registration& reg_method = fallback_ ? *fallback_ : *registration_;
+  const std::vector<AppearanceMatch> matches =
+      appearance_->query(frame.color, frame.depth, size_t(config_.relocalisation.candidates));
+  std::optional<Verdict> best;
+  double best_score = -1.0;
+  FramePyramidOptions po = config_.pyramid;
+  po.first_level = config_.tracking_level;
+  for (const AppearanceMatch& m : matches) {
+    if (m.id >= keyframes_.size() || !keyframes_.has_images(m.id)) continue;
+    const DepthImage kd = keyframes_.depth(m.id);
+    const ColorImage kc = keyframes_.colour(m.id);
+    const FramePyramid kp = build_frame_pyramid(kd, kc.empty() ? nullptr : &kc, camera_, po);
+    const RegistrationResult reg = reg_method.align(current, kp, SE3());
+    if (!reg.usable() || reg.degenerate_dims > config_.max_degenerate_dims) continue;
+    const Consistency c = depth_consistency(current.levels[0].vertices, depth_of(kp.levels[0].vertices),
+                                            tracking_camera_, reg.T_ref_cur, config_.volume.voxel_m);
+    if (c.sampled == 0 || double(c.overlap) < config_.min_overlap * double(c.sampled)) continue;
+    const double score = double(c.consistent) / double(c.overlap);
+    if (score < config_.min_consistent || score <= best_score) continue;
+    best_score = score;
+    Verdict v;
+    v.action = Verdict::integrate;
+    v.state = TrackState::relocalised;
+    v.T_world_cur = keyframes_[m.id].T_world_camera * reg.T_ref_cur;
+    v.registration = reg;
+    v.method = "relocalisation";
+    v.why = "relocalised against keyframe " + std::to_string(m.id) + " (frame " +
+            std::to_string(keyframes_[m.id].frame_index) + ")";
+    best = std::move(v);
+  }
+  if (best) {
+    // Verification against the map itself: the keyframe may be right and its pose since corrected.
     fusion::RaycastOptions ro = config_.raycast;
-    DepthImage hint;
-    if (r.integrated && !current.levels.empty()) {
-      const VertexMap& v = current.levels[0].vertices;
-      if (reference_->valid && config_.model_hint)
-        fusion::forward_project_depth(reference_->model.vertices, T_world_cur.inverse() * reference_->T_world_model,
-                                      tracking_camera_, &hint);
-      else
-        hint = DepthImage(v.width(), v.height(), 0.0f);
+    const fusion::RaycastResult model = fusion::raycast(grid_, tracking_camera_, best->T_world_cur, ro);
+    const Consistency c = depth_consistency(current.levels[0].vertices, model.depth, tracking_camera_, SE3(),
+                                            config_.volume.voxel_m);
+    if (c.sampled == 0 || double(c.overlap) < config_.min_overlap * double(c.sampled) ||
+        double(c.consistent) < config_.min_consistent * double(c.overlap))
+      best.reset();
+  }
+  r->ms.relocalise = ms_since(t0);
+  return best;
+}
+
+void Pipeline::integrate(const RgbdFrame& frame, const SE3& T_world_cur, FrameResult* r) {
+  const auto t0 = std::chrono::steady_clock::now();
+  fusion::integrate(grid_, frame.depth, frame.color, camera_, T_world_cur, config_.integrate, &store_);
+  if (config_.stream_radius_m > 0)
+    fusion::stream_out(grid_, store_, T_world_cur.translation(), config_.stream_radius_m);
+  r->ms.integrate = ms_since(t0);
+  r->integrated = true;
+}
+
+// The model maps at the new pose become the reference, with this frame's intensity as the photometric reference.
+void Pipeline::raycast_reference(FramePyramid& current, const SE3& T_world_cur, bool integrated, FrameResult* r) {
+  const auto t0 = std::chrono::steady_clock::now();
+  // The frame just integrated from this pose tells each ray where the surface is (fusion/raycast.h depth_hint):
+  // its depth at the tracking resolution, from the pyramid's vertices. Where the frame has no depth, the last
+  // model raycast moved to this pose (fusion::forward_project_depth) does: those rays would otherwise march
+  // their tile's whole depth range. A frame that was not integrated hints nothing about the model.
+  fusion::RaycastOptions ro = config_.raycast;
+  DepthImage hint;
+  if (!current.levels.empty()) {
+    const VertexMap& v = current.levels[0].vertices;
+    if (reference_->valid && config_.model_hint)
+      fusion::forward_project_depth(reference_->model.vertices, T_world_cur.inverse() * reference_->T_world_model,
+                                    tracking_camera_, &hint);
+    else
+      hint = DepthImage(v.width(), v.height(), 0.0f);
+    if (integrated)
       for (int y = 0; y < v.height(); ++y)
         for (int x = 0; x < v.width(); ++x)
           if (v(x, y).w != 0.0f) hint(x, y) = v(x, y).z;
-      ro.depth_hint = &hint;
-    }
-    fusion::raycast(grid_, tracking_camera_, T_world_cur, ro, &reference_->model);
-    reference_->T_world_model = T_world_cur;
-    reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
-                                              tracking_camera_, config_.pyramid.levels);
-    // The frame's intensity levels become the photometric reference; nothing else of it is needed again.
-    for (int l = 0; l < reference_->pyramid.num_levels() && l < current.num_levels(); ++l) {
-      FramePyramidLevel& dst = reference_->pyramid.levels[size_t(l)];
-      FramePyramidLevel& src = current.levels[size_t(l)];
-      dst.intensity = std::move(src.intensity);
-      dst.grad_x = std::move(src.grad_x);
-      dst.grad_y = std::move(src.grad_y);
-    }
-    reference_->valid = reference_->model.hit_count > 0;
-    r.ms.raycast = ms_since(t0);
-    last_good_ = T_world_cur;
-    last_good_time_s_ = frame.timestamp_s;
-    was_lost_ = false;
-    return r;
-  };
+    ro.depth_hint = &hint;
+  }
+  fusion::raycast(grid_, tracking_camera_, T_world_cur, ro, &reference_->model);
+  reference_->T_world_model = T_world_cur;
+  reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
+                                            tracking_camera_, config_.pyramid.levels);
+  // The frame's intensity levels become the photometric reference; nothing else of it is needed again.
+  for (int l = 0; l < reference_->pyramid.num_levels() && l < current.num_levels(); ++l) {
+    FramePyramidLevel& dst = reference_->pyramid.levels[size_t(l)];
+    FramePyramidLevel& src = current.levels[size_t(l)];
+    dst.intensity = std::move(src.intensity);
+    dst.grad_x = std::move(src.grad_x);
+    dst.grad_y = std::move(src.grad_y);
+  }
+  reference_->valid = reference_->model.hit_count > 0;
+  r->ms.raycast = ms_since(t0);
+}
 
-  if (!last_good_ || !reference_->valid) {
-    // Initialisation: place the first frame, integrate it. A frame that leaves the map without a surface to track
-    // against (no valid depth) does not count: the next frame initialises again.
-    // Mid-sequence (the map's surface went out of view) the pose stays where tracking left it: ground truth is only
-    // ever used to place the very first frame.
-    const SE3 T0 = last_good_ ? *last_good_ : frame.T_world_camera_gt.value_or(SE3());
-    const std::optional<SE3> before = last_good_;
-    accept(T0, TrackState::initialised);
-    if (!reference_->valid) {
-      last_good_ = before;
-      was_lost_ = true;
-      ++lost_;
-      r.state = TrackState::lost;
-      r.pose_valid = false;
-      r.message = "no surface seen yet: the map cannot be initialised from this frame";
-    }
-    return r;
-  }
+void Pipeline::add_keyframe_if_due(const RgbdFrame& frame, FrameResult* r) {
+  if (!keyframes_.wants_keyframe(r->T_world_camera, frame.index)) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  const Matrix6d info = r->registration ? r->registration->information : Matrix6d::Zero();
+  const size_t id = keyframes_.add(frame.index, frame.timestamp_s, r->T_world_camera, info, frame.depth, frame.color);
+  if (appearance_) appearance_->add(id, frame.color, frame.depth);
+  r->keyframe = true;
+  r->ms.keyframe = ms_since(t0);
+}
 
-  const bool prior = config_.constant_velocity && !was_lost_;
-  const SE3 guess = prior ? velocity_ : SE3();
-  {
-    const auto t0 = std::chrono::steady_clock::now();
-    r.registration = registration_->align(current, reference_->pyramid, guess);
-    r.ms.track = ms_since(t0);
-  }
-  const RegistrationResult& reg = *r.registration;
-  if (!reg.usable()) return lose(std::string("registration ") + hf::to_string(reg.status) + ": " + reg.message);
-  if (reg.degenerate_dims > config_.max_degenerate_dims)
-    return lose("registration degenerate in " + std::to_string(reg.degenerate_dims) + " directions (at most " +
-                std::to_string(config_.max_degenerate_dims) + " accepted)");
-  // Plausibility against the sensor clock; a frame rate of 30 Hz when stamps are missing or out of order.
-  double dt = frame.timestamp_s - last_good_time_s_;
-  if (!(dt > 1e-6)) dt = 1.0 / 30.0;
-  const double speed = reg.T_ref_cur.translation().norm() / dt;
-  const double angular = reg.T_ref_cur.log().head<3>().norm() * 180.0 / M_PI / dt;
-  if (speed > config_.max_speed_m_per_s)
-    return lose("implausible motion: " + std::to_string(speed) + " m/s > max_speed_m_per_s " +
-                std::to_string(config_.max_speed_m_per_s));
-  if (angular > config_.max_angular_speed_deg_per_s)
-    return lose("implausible rotation: " + std::to_string(angular) + " deg/s > max_angular_speed_deg_per_s " +
-                std::to_string(config_.max_angular_speed_deg_per_s));
-  {
-    const Consistency cons = depth_consistency(current.levels[0].vertices, reference_->model, tracking_camera_, reg.T_ref_cur,
-                                               config_.volume.voxel_m);
-    if (cons.sampled > 0 && double(cons.overlap) >= config_.min_overlap * double(cons.sampled) &&
-        double(cons.consistent) < config_.min_consistent * double(cons.overlap))
-      return lose("depth disagrees with the map: " + std::to_string(cons.consistent) + " of " +
-                  std::to_string(cons.overlap) + " overlapping samples consistent (min_consistent " +
-                  std::to_string(config_.min_consistent) + ")");
-  }
-  const bool recovering = was_lost_;
-  // After a loss the motion spans several frames: no prior for the next one rather than a wrong one.
-  velocity_ = recovering ? SE3() : reg.T_ref_cur;
-  return accept(*last_good_ * reg.T_ref_cur, recovering ? TrackState::recovered : TrackState::tracked);
+void Pipeline::lose(FrameResult* r, std::string why) {
+  ++lost_;
+  ++lost_spell_;
+  r->state = TrackState::lost;
+  r->pose_valid = false;
+  r->T_world_camera = T_world_cur_.value_or(SE3());
+  r->message = std::move(why);
 }
 
 TriangleMesh Pipeline::extract_mesh() const {

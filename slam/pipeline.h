@@ -5,24 +5,35 @@
 //   for (each frame) { hf::slam::FrameResult r = p.process(frame); ... }
 //   hf::TriangleMesh mesh = p.extract_mesh();
 //
-// Stages of process(), each timed into FrameResult::ms (the caller times `read`):
-//   preprocess  frame pyramid of the new frame: bilateral-filtered depth, vertices, normals, intensity, gradients.
-//   track       align the frame to the reference: the model raycast at the last good pose for the geometric rows
-//               (frame-to-model, KinectFusion) and the previous frame's intensity for the photometric rows
-//               (frame-to-frame: the report, section 3.2, finds the model colour too blurred to track against).
-//               Both live in the camera frame of the last good pose, so T_world_cur = T_world_ref * T_ref_cur.
-//   decide      the failure policy below.
-//   integrate   fuse the frame into the TSDF at its pose (only when the frame was accepted).
-//   raycast     the model maps at the new pose: the next frame's reference.
+// Stages of process(), each a function of its own, timed into FrameResult::ms (the caller times `read`):
+//   preprocess   frame pyramid of the new frame: bilateral-filtered depth, vertices, normals, intensity, gradients.
+//   track        align the frame to the reference: the model raycast at the last pose for the geometric rows
+//                (frame-to-model, KinectFusion) and the previous frame's intensity for the photometric rows
+//                (frame-to-frame: the report, section 3.2, finds the model colour too blurred to track against).
+//                Both live in the camera frame of the last pose, so T_world_cur = T_world_ref * T_ref_cur. When
+//                that fails or disagrees with the map, fallback_registration (icp) is tried against the same model.
+//   decide       the verdict (Verdict) from the registration results, computed before any state changes:
+//                integrate, odometry or lose (the failure policy below).
+//   relocalise   only for a frame the verdict loses, once keyframes exist: the frame is registered against the
+//                keyframes its appearance retrieves (slam/appearance.h) and the best is verified against the map.
+//   integrate    fuse the frame into the TSDF at its pose (integrate verdicts only).
+//   raycast      the model maps at the new pose: the next frame's reference.
+//   keyframe     a tracked, integrated frame that moved far enough from the last keyframe becomes one
+//                (slam/keyframes.h) and is added to the appearance index.
 //
-// Failure policy (it lives here, not in registration): a frame whose registration is not usable, is degenerate in
-// more than `max_degenerate_dims` directions, or implies a motion faster than max_speed_m_per_s /
-// max_angular_speed_deg_per_s since the last good frame is LOST: it is not integrated, the pose stays at the last
-// good one (so the reference - raycast and intensity of the last good frame - is left untouched), and the next frame
-// is tracked against that same reference from the last good pose with no motion prior, coarse level first (which
-// is how the driver always starts). When it succeeds again the frame is RECOVERED. A bad frame never touches the
-// map. While lost, FrameResult::T_world_camera holds the last good pose and `pose_valid` is false, so a trajectory
-// written by the caller can leave lost frames out.
+// Failure policy (it lives here, not in registration). A registration is PLAUSIBLE when it is usable, degenerate
+// in at most max_degenerate_dims directions and implies a motion below max_speed_m_per_s /
+// max_angular_speed_deg_per_s since the last pose; it is CONSISTENT when the frame's depth agrees with the model
+// depth where they overlap (min_overlap, min_consistent). Then:
+//   - plausible and consistent (primary or fallback): TRACKED (RECOVERED after lost frames), integrated;
+//   - plausible but not consistent, while not lost: ODOMETRY: the pose moves to the estimate and the reference is
+//     raycast there with the frame's intensity, but nothing is integrated (a frame not trusted enough to integrate
+//     must not freeze the pose, yet must not touch the map);
+//   - otherwise LOST: not integrated, the pose stays at the last estimate, `pose_valid` is false; the next frame is
+//     tracked against the same reference with no motion prior and, failing that, relocalised against the
+//     keyframes (RELOCALISED when that succeeds). A bad frame never touches the map.
+// FrameResult::T_world_camera always holds the pose the run reports for the frame (for a lost frame: the last
+// estimate), so a trajectory of every frame can be written and judged honestly.
 //
 // The first frame (or the first after the map was empty) is placed at its ground-truth pose when the dataset has
 // one, else at the identity, and integrated without tracking: the map then lives in the ground-truth world frame,
@@ -49,6 +60,8 @@
 #include "io/mesh.h"
 #include "registration/frame_pyramid.h"
 #include "registration/registration.h"
+#include "slam/appearance.h"
+#include "slam/keyframes.h"
 #include "slam/pipeline_config.h"
 
 namespace hf::slam {
@@ -57,25 +70,29 @@ enum class TrackState {
   initialised,  // first frame: placed (ground truth or identity) and integrated
   tracked,      // registration accepted
   recovered,    // accepted after one or more lost frames
-  lost,         // rejected by the failure policy: not integrated, pose = last good pose
+  relocalised,  // lost before, placed by registration against a keyframe and verified against the map; integrated
+  odometry,     // pose estimated but the frame disagrees with the map: not integrated (see the failure policy)
+  lost,         // rejected by the failure policy: not integrated, pose = the last estimate
   groundtruth,  // pose from the dataset (registration = groundtruth)
 };
 const char* to_string(TrackState state);
 
 // Milliseconds per stage for one frame (0 for stages that did not run).
 struct StageMs {
-  double read = 0, preprocess = 0, track = 0, integrate = 0, raycast = 0;
-  double total() const { return read + preprocess + track + integrate + raycast; }
+  double read = 0, preprocess = 0, track = 0, relocalise = 0, integrate = 0, raycast = 0, keyframe = 0;
+  double total() const { return read + preprocess + track + relocalise + integrate + raycast + keyframe; }
 };
 
 struct FrameResult {
   size_t index = 0;
   double timestamp_s = 0.0;
   TrackState state = TrackState::lost;
-  SE3 T_world_camera;        // the estimate; while lost, the last good pose
+  SE3 T_world_camera;        // the estimate; while lost, the last estimate (the pose the run reports)
   bool pose_valid = false;   // false while lost (and for groundtruth frames without ground truth)
   bool integrated = false;
-  std::optional<RegistrationResult> registration;  // when tracking ran
+  bool keyframe = false;     // the frame became a keyframe
+  std::string method;        // the registration that placed the frame (primary, fallback, or "relocalisation")
+  std::optional<RegistrationResult> registration;  // the one that placed (or failed to place) the frame
   std::string message;       // why the frame was lost (one line), empty otherwise
   StageMs ms;                // `read` is left for the caller
 };
@@ -98,7 +115,8 @@ class Pipeline {
   const fusion::BlockStore& store() const { return store_; }
   size_t frames_processed() const { return frames_; }
   size_t frames_lost() const { return lost_; }
-  std::optional<SE3> last_good_pose() const { return last_good_; }
+  std::optional<SE3> last_good_pose() const { return T_world_cur_; }
+  const KeyframeMap& keyframes() const { return keyframes_; }
 
   // The whole map (resident and streamed-out blocks) as a welded, coloured mesh.
   TriangleMesh extract_mesh() const;
@@ -107,17 +125,32 @@ class Pipeline {
 
  private:
   struct Reference;
+  struct Verdict;
+  FramePyramid preprocess(const RgbdFrame& frame, FrameResult* r) const;
+  void initialise(const RgbdFrame& frame, FramePyramid& current, FrameResult* r);
+  Verdict track(const FramePyramid& current, double timestamp_s, FrameResult* r);
+  Verdict decide(const RegistrationResult& reg, const FramePyramid& current, double timestamp_s,
+                 const std::string& method) const;
+  std::optional<Verdict> relocalise(const RgbdFrame& frame, const FramePyramid& current, FrameResult* r);
+  void integrate(const RgbdFrame& frame, const SE3& T_world_cur, FrameResult* r);
+  void raycast_reference(FramePyramid& current, const SE3& T_world_cur, bool integrated, FrameResult* r);
+  void add_keyframe_if_due(const RgbdFrame& frame, FrameResult* r);
+  void lose(FrameResult* r, std::string why);
+
   PipelineConfig config_;
   PinholeCamera camera_;
   PinholeCamera tracking_camera_;  // camera_.scaled(tracking_level)
   fusion::VoxelBlockGrid grid_;
   fusion::BlockStore store_;
   std::unique_ptr<Registration> registration_;  // null for groundtruth
-  std::unique_ptr<Reference> reference_;        // model maps + intensity at the last good pose
-  std::optional<SE3> last_good_;
-  double last_good_time_s_ = 0.0;
+  std::unique_ptr<Registration> fallback_;      // null when none
+  std::unique_ptr<Reference> reference_;        // model maps + intensity at the last pose
+  KeyframeMap keyframes_;
+  std::unique_ptr<AppearanceIndex> appearance_;
+  std::optional<SE3> T_world_cur_;  // the last estimate (tracked, odometry or relocalised)
+  double last_time_s_ = 0.0;
   SE3 velocity_;          // T_prev_cur of the last accepted frame pair
-  bool was_lost_ = false;
+  long lost_spell_ = 0;   // consecutive lost frames up to now
   size_t frames_ = 0, lost_ = 0;
 };
 

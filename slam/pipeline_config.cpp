@@ -5,9 +5,11 @@
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "core/error.h"
+#include "slam/appearance.h"
 
 namespace hf::slam {
 namespace {
@@ -121,35 +123,30 @@ void visit(V&& v, FramePyramidOptions& p) {
   v("max_depth_m", p.max_depth_m);
   v("min_depth_m", p.min_depth_m);
 }
+// The driver's and the method's own knobs, by the keys registration declares (registration.h OptionVisitor).
 template <class V>
 void visit(V&& v, RegistrationOptions& o) {
-  v("iterations", o.iterations);
-  v("min_step_rotation_rad", o.min_step_rotation_rad);
-  v("min_step_translation_m", o.min_step_translation_m);
-  v("max_dist_m", o.max_dist_m);
-  v("max_normal_angle_deg", o.max_normal_angle_deg);
-  v("robust_icp", o.robust_icp);
-  v("huber_icp_m", o.huber_icp_m);
-  v("robust_rgb", o.robust_rgb);
-  v("huber_rgb", o.huber_rgb);
-  v("t_dof", o.t_dof);
-  v("t_sigma_rgb_init", o.t_sigma_rgb_init);
-  v("t_sigma_rgb_min", o.t_sigma_rgb_min);
-  v("t_sigma_icp_m", o.t_sigma_icp_m);
-  v("rgb_weight", o.rgb_weight);
-  v("min_gradient", o.min_gradient);
-  v("photometric_occlusion_check", o.photometric_occlusion_check);
-  v("degeneracy_threshold", o.degeneracy_threshold);
-  v("min_inliers", o.min_inliers);
-  v("poor_inlier_ratio", o.poor_inlier_ratio);
-  v("max_translation_m", o.max_translation_m);
-  v("max_rotation_deg", o.max_rotation_deg);
-  v("max_final_step_translation_m", o.max_final_step_translation_m);
-  v("max_final_step_rotation_rad", o.max_final_step_rotation_rad);
+  OptionVisitorFor<std::remove_reference_t<V>> adaptor(v);
+  o.visit(adaptor);
+}
+template <class V>
+void visit(V&& v, KeyframeOptions& o) {
+  v("min_translation_m", o.min_translation_m);
+  v("min_rotation_deg", o.min_rotation_deg);
+  v("max_frames_between", o.max_frames_between);
+  v("memory_budget_mb", o.memory_budget_mb);
+  v("jpeg_quality", o.jpeg_quality);
+}
+template <class V>
+void visit(V&& v, RelocalisationOptions& o) {
+  v("enabled", o.enabled);
+  v("candidates", o.candidates);
+  v("appearance", o.appearance);
 }
 template <class V>
 void visit_scalars(V&& v, PipelineConfig& c) {
   v("registration", c.registration);
+  v("fallback_registration", c.fallback_registration);
   v("backend", c.backend);
   v("tracking_level", c.tracking_level);
   v("rgb_weight", c.rgb_weight);
@@ -182,12 +179,33 @@ void section_from_json(const nlohmann::json& j, const std::string& where, S& s) 
     if (!known.contains(it.key())) throw Error(where + ": unknown key '" + it.key() + "'");
 }
 
+// registration_options as written before methods owned their knobs (report.json up to cc8db77 holds every
+// method's keys in one object): former keys are renamed or dropped by registration's rule (registration.h,
+// migrate_registration_key); the method's own keys and keys that were never options pass unchanged (the latter are
+// then rejected as unknown).
+nlohmann::json migrate_registration_options(const nlohmann::json& j, const RegistrationOptions& now) {
+  if (!j.is_object()) return j;
+  RegistrationOptions copy = now;
+  const nlohmann::json known = section_to_json(copy);
+  nlohmann::json out = nlohmann::json::object();
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::optional<std::string> key =
+        known.contains(it.key()) ? std::optional<std::string>(it.key()) : migrate_registration_key(now, it.key());
+    if (!key) {
+      out[it.key()] = it.value();
+    } else if (!key->empty() && !(*key != it.key() && j.contains(*key))) {
+      out[*key] = it.value();
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 RegistrationOptions effective_registration_options(const PipelineConfig& c) {
   if (c.registration_options) return *c.registration_options;
   RegistrationOptions o = default_registration_options(c.registration);
-  o.rgb_weight = c.rgb_weight;
+  o.set("rgb_weight", c.rgb_weight);  // methods without photometric rows have no such knob
   return o;
 }
 
@@ -202,6 +220,19 @@ void PipelineConfig::validate() const {
       for (const auto& n : names) known += ", " + n;
       throw Error("unknown registration method '" + registration + "' (known: " + known + ")");
     }
+  }
+  if (!fallback_registration.empty()) {
+    const auto names = registration_names();
+    if (std::find(names.begin(), names.end(), fallback_registration) == names.end())
+      throw Error("unknown fallback_registration '" + fallback_registration + "'");
+  }
+  keyframes.validate();
+  if (relocalisation.candidates < 1 || relocalisation.candidates > 100)
+    throw Error("relocalisation.candidates must be in [1, 100]");
+  if (!relocalisation.appearance.empty()) {
+    const auto names = appearance_index_names();
+    if (std::find(names.begin(), names.end(), relocalisation.appearance) == names.end())
+      throw Error("unknown relocalisation.appearance '" + relocalisation.appearance + "'");
   }
   volume.validate();
   raycast.validate();
@@ -230,6 +261,8 @@ nlohmann::json config_to_json(const PipelineConfig& config) {
   j["integrate"] = section_to_json(c.integrate);
   j["raycast"] = section_to_json(c.raycast);
   j["pyramid"] = section_to_json(c.pyramid);
+  j["keyframes"] = section_to_json(c.keyframes);
+  j["relocalisation"] = section_to_json(c.relocalisation);
   // Always write the options in force, so a report says exactly what ran.
   RegistrationOptions r = c.registration == "groundtruth" ? RegistrationOptions{} : effective_registration_options(c);
   j["registration_options"] = section_to_json(r);
@@ -242,7 +275,8 @@ PipelineConfig config_from_json(const nlohmann::json& j, const std::string& wher
   FromJson f{&j, where};
   visit_scalars(f, c);
   // The method first: the registration options start from its defaults.
-  static const char* sections[] = {"volume", "integrate", "raycast", "pyramid", "registration_options"};
+  static const char* sections[] = {"volume", "integrate", "raycast", "pyramid", "registration_options",
+                                   "keyframes", "relocalisation"};
   for (auto it = j.begin(); it != j.end(); ++it) {
     const std::string& k = it.key();
     if (std::find(std::begin(sections), std::end(sections), k) != std::end(sections)) continue;
@@ -254,10 +288,14 @@ PipelineConfig config_from_json(const nlohmann::json& j, const std::string& wher
   if (j.contains("integrate")) section_from_json(j["integrate"], where + ": integrate", c.integrate);
   if (j.contains("raycast")) section_from_json(j["raycast"], where + ": raycast", c.raycast);
   if (j.contains("pyramid")) section_from_json(j["pyramid"], where + ": pyramid", c.pyramid);
+  if (j.contains("keyframes")) section_from_json(j["keyframes"], where + ": keyframes", c.keyframes);
+  if (j.contains("relocalisation"))
+    section_from_json(j["relocalisation"], where + ": relocalisation", c.relocalisation);
   if (j.contains("registration_options") && !j["registration_options"].is_null()) {
     RegistrationOptions r =
         c.registration == "groundtruth" ? RegistrationOptions{} : effective_registration_options(c);
-    section_from_json(j["registration_options"], where + ": registration_options", r);
+    section_from_json(migrate_registration_options(j["registration_options"], r), where + ": registration_options",
+                      r);
     c.registration_options = r;
   }
   try {

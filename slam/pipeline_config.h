@@ -18,11 +18,23 @@
 #include "fusion/voxel_block_grid.h"
 #include "registration/frame_pyramid.h"
 #include "registration/registration.h"
+#include "slam/keyframes.h"
 
 namespace hf::slam {
 
+// Relocalisation (slam/pipeline.h, "Failure policy"): what a lost frame is registered against.
+struct RelocalisationOptions {
+  bool enabled = true;
+  int candidates = 5;       // keyframes retrieved by appearance per lost frame, each registered and verified
+  std::string appearance;   // appearance index (slam/appearance.h); empty = default_appearance_index_name()
+};
+
 struct PipelineConfig {
   std::string registration = "combined";  // a registry name (make_registration) or "groundtruth"
+  // Tried against the same model reference when `registration` fails or its result disagrees with the map: the
+  // geometric rows alone cannot be led astray by a bad colour frame or unregistered colour. Empty = none; unused
+  // when it equals `registration`.
+  std::string fallback_registration = "icp";
   std::string backend = "cpu";             // reduction backend: cpu | opencl
   fusion::VolumeParams volume;             // voxel_m 0.01, truncation 4 voxels, capacity, weight cap
   fusion::IntegrateParams integrate;
@@ -67,6 +79,8 @@ struct PipelineConfig {
   // Streaming (Niessner et al. 2013): blocks farther than this from the camera go to the host store after each
   // frame; 0 = off.
   double stream_radius_m = 0.0;
+  KeyframeOptions keyframes;
+  RelocalisationOptions relocalisation;
 
   // Throws hf::Error naming the bad field (also validates the nested option structs).
   void validate() const;

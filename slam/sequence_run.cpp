@@ -27,6 +27,16 @@ long SequenceRun::frames_lost() const {
 
 Trajectory SequenceRun::estimate() const {
   Trajectory t;
+  bool placed = false;  // frames lost before the map was initialised have no pose to report
+  for (const auto& f : frames) {
+    placed = placed || f.pose_valid;
+    if (placed) t.push_back({f.timestamp_s, f.T_world_camera});
+  }
+  return t;
+}
+
+Trajectory SequenceRun::tracked_estimate() const {
+  Trajectory t;
   for (const auto& f : frames)
     if (f.pose_valid) t.push_back({f.timestamp_s, f.T_world_camera});
   return t;
@@ -122,8 +132,18 @@ RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const Fra
   s.frames_bad = long(run.bad_frames.size());
   s.interrupted = run.interrupted;
   StageMs sum;
+  long spell = 0;
   for (const auto& f : run.frames) {
     s.frames_lost += f.state == TrackState::lost;
+    s.frames_odometry += f.state == TrackState::odometry;
+    s.frames_relocalised += f.state == TrackState::relocalised;
+    s.frames_fallback += f.pose_valid && !f.method.empty() && f.method != s.registration &&
+                         f.state != TrackState::relocalised;
+    s.coverage += f.pose_valid ? 1.0 : 0.0;
+    spell = f.state == TrackState::lost ? spell + 1 : 0;
+    s.lost_spells += spell == 1;
+    s.longest_lost_spell = std::max(s.longest_lost_spell, spell);
+    s.worst_frame_ms = std::max(s.worst_frame_ms, f.ms.total());
     if (f.registration && f.state != TrackState::lost) {
       s.frames_degenerate += f.registration->status == RegistrationStatus::degenerate;
       s.frames_poor += f.registration->status == RegistrationStatus::poor;
@@ -131,15 +151,22 @@ RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const Fra
     sum.read += f.ms.read;
     sum.preprocess += f.ms.preprocess;
     sum.track += f.ms.track;
+    sum.relocalise += f.ms.relocalise;
     sum.integrate += f.ms.integrate;
     sum.raycast += f.ms.raycast;
+    sum.keyframe += f.ms.keyframe;
   }
+  s.keyframes = pipeline.keyframes().size();
   if (s.frames > 0) {
     const double n = double(s.frames);
-    s.mean_ms = {sum.read / n, sum.preprocess / n, sum.track / n, sum.integrate / n, sum.raycast / n};
+    s.coverage /= n;
+    s.mean_ms = {sum.read / n,     sum.preprocess / n, sum.track / n,   sum.relocalise / n,
+                 sum.integrate / n, sum.raycast / n,    sum.keyframe / n};
     s.fps = sum.total() > 0 ? 1000.0 * n / sum.total() : 0.0;
   }
   if (auto eval = try_evaluate(source.ground_truth(), run.estimate())) s.metrics = eval->metrics();
+  if (auto eval = try_evaluate(source.ground_truth(), run.tracked_estimate()))
+    s.ate_tracked_only_m = eval->metrics().ate_m.rmse;
   const auto& grid = pipeline.map();
   s.blocks_allocated = grid.block_count() + pipeline.store().size();
   s.memory_bytes = grid.memory_bytes();
@@ -163,6 +190,15 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
   j["frames_lost"] = s.frames_lost;
   j["frames_degenerate"] = s.frames_degenerate;
   j["frames_poor"] = s.frames_poor;
+  j["frames_odometry"] = s.frames_odometry;
+  j["frames_relocalised"] = s.frames_relocalised;
+  j["frames_fallback"] = s.frames_fallback;
+  j["coverage"] = s.coverage;
+  j["lost_spells"] = s.lost_spells;
+  j["longest_lost_spell"] = s.longest_lost_spell;
+  j["keyframes"] = s.keyframes;
+  j["worst_frame_ms"] = s.worst_frame_ms;
+  j["ate_tracked_only_m"] = opt(s.ate_tracked_only_m);
   j["interrupted"] = s.interrupted;
   j["stopped_by"] = run.stopped_by.empty() ? nlohmann::json(nullptr) : nlohmann::json(run.stopped_by);
   j["ate_rmse_m"] = opt(s.ate_rmse_m());
@@ -172,8 +208,9 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
   j["fps"] = s.fps;
   j["wall_s"] = run.wall_s;
   j["ms_per_frame"] = {{"read", s.mean_ms.read},         {"preprocess", s.mean_ms.preprocess},
-                       {"track", s.mean_ms.track},       {"integrate", s.mean_ms.integrate},
-                       {"raycast", s.mean_ms.raycast},   {"total", s.mean_ms.total()}};
+                       {"track", s.mean_ms.track},       {"relocalise", s.mean_ms.relocalise},
+                       {"integrate", s.mean_ms.integrate}, {"raycast", s.mean_ms.raycast},
+                       {"keyframe", s.mean_ms.keyframe}, {"total", s.mean_ms.total()}};
   j["blocks_allocated"] = s.blocks_allocated;
   j["bytes_per_voxel"] = s.bytes_per_voxel;
   j["memory_bytes"] = s.memory_bytes;
@@ -182,7 +219,8 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
   nlohmann::json frames = nlohmann::json::array();
   for (const auto& f : run.frames) {
     nlohmann::json fj = {{"index", f.index}, {"timestamp_s", f.timestamp_s}, {"state", to_string(f.state)},
-                         {"integrated", f.integrated}, {"ms", f.ms.total()}};
+                         {"integrated", f.integrated}, {"keyframe", f.keyframe}, {"ms", f.ms.total()}};
+    if (!f.method.empty()) fj["method"] = f.method;
     if (f.registration) {
       fj["registration_status"] = hf::to_string(f.registration->status);
       fj["inlier_ratio"] = f.registration->inlier_ratio;
@@ -211,16 +249,22 @@ std::string report_markdown(const RunSummary& s, const SequenceRun& run, const F
      << "| registration | " << s.registration << " (backend " << s.backend << ") |\n"
      << "| voxel | " << fmt(s.voxel_m * 1000.0, 1) << " mm |\n"
      << "| frames | " << s.frames << " processed, " << s.frames_bad << " unreadable, " << s.frames_lost << " lost, "
-     << s.frames_degenerate << " degenerate, " << s.frames_poor << " poor"
+     << s.frames_degenerate << " degenerate, " << s.frames_poor << " poor, " << s.frames_odometry
+     << " odometry only, " << s.frames_relocalised << " relocalised"
      << (s.interrupted ? " (interrupted)" : "") << (run.stopped_by.empty() ? "" : " (stopped early: " + run.stopped_by + ")")
      << " |\n"
-     << "| speed | " << fmt(s.fps, 1) << " fps (" << fmt(s.mean_ms.total(), 1) << " ms per frame) |\n"
+     << "| coverage | " << fmt(100.0 * s.coverage, 1) << " % of frames with a pose; " << s.lost_spells
+     << " lost spells, the longest " << s.longest_lost_spell << " frames |\n"
+     << "| keyframes | " << s.keyframes << " |\n"
+     << "| speed | " << fmt(s.fps, 1) << " fps (" << fmt(s.mean_ms.total(), 1) << " ms per frame, worst "
+     << fmt(s.worst_frame_ms, 1) << " ms) |\n"
      << "| map | " << s.blocks_allocated << " blocks, " << fmt(double(s.memory_bytes) / (1 << 20), 1) << " MiB, "
      << fmt(s.bytes_per_voxel, 2) << " bytes per voxel |\n\n"
-     << "## Milliseconds per frame\n\n| read | preprocess | track | integrate | raycast | total |\n"
-     << "|---|---|---|---|---|---|\n| " << fmt(s.mean_ms.read, 1) << " | " << fmt(s.mean_ms.preprocess, 1) << " | "
-     << fmt(s.mean_ms.track, 1) << " | " << fmt(s.mean_ms.integrate, 1) << " | " << fmt(s.mean_ms.raycast, 1)
-     << " | " << fmt(s.mean_ms.total(), 1) << " |\n\n## Trajectory error\n\n";
+     << "## Milliseconds per frame\n\n| read | preprocess | track | relocalise | integrate | raycast | keyframe | total |\n"
+     << "|---|---|---|---|---|---|---|---|\n| " << fmt(s.mean_ms.read, 1) << " | " << fmt(s.mean_ms.preprocess, 1)
+     << " | " << fmt(s.mean_ms.track, 1) << " | " << fmt(s.mean_ms.relocalise, 1) << " | "
+     << fmt(s.mean_ms.integrate, 1) << " | " << fmt(s.mean_ms.raycast, 1) << " | " << fmt(s.mean_ms.keyframe, 1)
+     << " | " << fmt(s.mean_ms.total(), 1) << " |\n\n## Trajectory error (every frame, lost ones at their reported pose)\n\n";
   if (s.metrics) {
     md << format_metrics_markdown(*s.metrics);
   } else {

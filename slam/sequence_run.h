@@ -42,7 +42,10 @@ struct SequenceRun {
   double wall_s = 0.0;                    // the whole loop
 
   long frames_lost() const;
-  Trajectory estimate() const;            // poses of the frames with pose_valid, TUM time stamps
+  // The pose the run reports for EVERY processed frame (a lost frame's is the last estimate), TUM time stamps:
+  // what trajectory.txt holds and ATE is computed over, so a lost frame is never left out of the error.
+  Trajectory estimate() const;  // (frames lost before the first placed frame have none)
+  Trajectory tracked_estimate() const;    // only the frames with pose_valid (for comparison)
 };
 
 SequenceRun run_sequence(FrameSource& source, Pipeline& pipeline, const RunControl& control = {});
@@ -54,6 +57,12 @@ struct RunSummary {
   std::string registration, backend;
   double voxel_m = 0.0;
   long frames = 0, frames_bad = 0, frames_lost = 0, frames_degenerate = 0, frames_poor = 0;
+  long frames_odometry = 0, frames_relocalised = 0, frames_fallback = 0;  // see slam/pipeline.h TrackState
+  double coverage = 0.0;        // frames with a valid pose / frames
+  long lost_spells = 0, longest_lost_spell = 0;  // runs of consecutive lost frames
+  size_t keyframes = 0;
+  double worst_frame_ms = 0.0;  // the slowest frame's stage total (read included)
+  std::optional<double> ate_tracked_only_m;  // ATE RMSE over the frames with a valid pose only
   bool interrupted = false;
   std::optional<TrajectoryMetrics> metrics;  // ATE and RPE (1 s delta)
   double fps = 0.0;             // frames / sum of per-frame stage times

@@ -15,6 +15,7 @@
 
 #include "core/error.h"
 #include "datasets/synthetic_source.h"
+#include "registration/icp.h"
 #include "slam/pipeline.h"
 #include "slam/sequence_run.h"
 
@@ -132,8 +133,9 @@ TEST(Pipeline, GroundTruthMapMatchesTheScene) {
 }
 
 TEST(Pipeline, GarbageFramesAreLostNotIntegratedAndTrackingRecovers) {
-  // Frame 12: uniform random depth (a sensor glitch); frame 20: no depth at all. Both must be lost, leave the map
-  // untouched, and tracking must continue from the last good pose.
+  // Frame 12: uniform random depth (a sensor glitch); frame 20: no depth at all. Neither may touch the map; frame
+  // 12's colour still tracks (the pose keeps moving: odometry) or it is lost; frame 20 has nothing to track with and
+  // is lost; tracking continues right after each.
   auto inner = datasets::open_synthetic("room", half_res("room", 40));
   ModifiedSource source(std::move(inner), [](RgbdFrame& f) {
     if (f.index == 12) {
@@ -157,19 +159,27 @@ TEST(Pipeline, GarbageFramesAreLostNotIntegratedAndTrackingRecovers) {
   const SequenceRun run = run_sequence(source, pipeline, control);
   ASSERT_EQ(run.frames.size(), 40u);
   for (const auto& f : run.frames) EXPECT_TRUE(finite_pose(f.T_world_camera)) << f.index;
-  EXPECT_EQ(run.frames[12].state, TrackState::lost) << run.frames[12].message;
+  const TrackState s12 = run.frames[12].state;
+  EXPECT_TRUE(s12 == TrackState::lost || s12 == TrackState::odometry) << to_string(s12);
   EXPECT_FALSE(run.frames[12].integrated);
-  EXPECT_FALSE(run.frames[12].pose_valid);
+  EXPECT_EQ(run.frames[12].pose_valid, s12 == TrackState::odometry);
   EXPECT_FALSE(run.frames[12].message.empty());
   EXPECT_EQ(run.frames[20].state, TrackState::lost);
   EXPECT_FALSE(run.frames[20].integrated);
-  EXPECT_EQ(run.frames[13].state, TrackState::recovered);
+  EXPECT_FALSE(run.frames[20].pose_valid);
+  EXPECT_EQ(run.frames[13].state, s12 == TrackState::lost ? TrackState::recovered : TrackState::tracked);
   EXPECT_EQ(run.frames[21].state, TrackState::recovered);
-  EXPECT_EQ(run.frames_lost(), 2);
+  for (size_t i = 0; i < run.frames.size(); ++i) {
+    if (i == 12 || i == 20) continue;
+    EXPECT_TRUE(run.frames[i].integrated) << i;
+  }
   const RunSummary s = summarize(run, pipeline, source, "injected");
   ASSERT_TRUE(s.ate_rmse_m());
-  EXPECT_LT(*s.ate_rmse_m(), 0.01);
-  EXPECT_EQ(s.frames_lost, 2);
+  EXPECT_LT(*s.ate_rmse_m(), 0.01);  // over all 40 frames, the lost ones at their reported pose
+  EXPECT_EQ(s.frames_lost, run.frames_lost());
+  EXPECT_EQ(s.lost_spells, s.frames_lost);  // each fault is a spell of one frame
+  EXPECT_EQ(s.longest_lost_spell, 1);
+  EXPECT_NEAR(s.coverage, double(40 - s.frames_lost) / 40.0, 1e-12);
 }
 
 TEST(Pipeline, FirstFramesWithoutDepthDoNotInitialise) {
@@ -228,16 +238,16 @@ TEST(PipelineConfig, JsonRoundTripAndErrors) {
   c.volume.voxel_m = 0.02;
   c.max_speed_m_per_s = 1.5;
   RegistrationOptions r = default_registration_options("icp");
-  r.iterations = {6, 4, 2};
-  r.robust_icp = RobustKernel::student_t;
+  r.driver.iterations = {6, 4, 2};
+  r.method_as<IcpOptions>().robust_icp = RobustKernel::student_t;
   c.registration_options = r;
   const nlohmann::json j = config_to_json(c);
   const PipelineConfig back = config_from_json(j, "test");
   EXPECT_EQ(config_to_json(back), j);
   EXPECT_EQ(back.volume.voxel_m, 0.02);
   ASSERT_TRUE(back.registration_options);
-  EXPECT_EQ(back.registration_options->iterations, (std::vector<int>{6, 4, 2}));
-  EXPECT_EQ(back.registration_options->robust_icp, RobustKernel::student_t);
+  EXPECT_EQ(back.registration_options->driver.iterations, (std::vector<int>{6, 4, 2}));
+  EXPECT_EQ(back.registration_options->method_as<IcpOptions>().robust_icp, RobustKernel::student_t);
 
   auto error_of = [](const nlohmann::json& bad) -> std::string {
     try {
@@ -270,6 +280,47 @@ TEST(PipelineConfig, FileErrorsNameFileAndLine) {
     EXPECT_NE(std::string(e.what()).find(path + ":3:"), std::string::npos) << e.what();
   }
   EXPECT_THROW(load_config((dir / "missing.json").string()), Error);
+}
+
+// report.json files written before methods owned their knobs keep reading: their registration_options hold every
+// method's keys (the former RegistrationOptions' visitor, all defaults but t_dof 7 and max_dist_m 0.2), which each
+// method renames or drops by registration's rule (migrate_registration_key).
+TEST(PipelineConfig, FormerRegistrationOptionsStillRead) {
+  const nlohmann::json former = nlohmann::json::parse(R"({"iterations": [10, 5, 4], "min_step_rotation_rad": 1e-05,
+      "min_step_translation_m": 1e-05, "max_dist_m": 0.2, "max_normal_angle_deg": 30.0, "robust_icp": "huber",
+      "huber_icp_m": 0.01, "robust_rgb": "huber", "huber_rgb": 0.05, "t_dof": 7.0, "t_sigma_rgb_init": 0.05,
+      "t_sigma_rgb_min": 0.002, "t_sigma_icp_m": 0.01, "rgb_weight": 0.4, "min_gradient": 0.0039215689,
+      "photometric_occlusion_check": true, "degeneracy_threshold": 0.003, "min_inliers": 64, "poor_inlier_ratio": 0.3,
+      "max_translation_m": 0.5, "max_rotation_deg": 45.0, "max_final_step_translation_m": 0.002,
+      "max_final_step_rotation_rad": 0.002})");
+  for (const std::string method : {"icp", "photometric", "combined", "groundtruth"}) {
+    SCOPED_TRACE(method);
+    const PipelineConfig c =
+        config_from_json({{"registration", method}, {"registration_options", former}}, "report.json");
+    ASSERT_TRUE(c.registration_options);
+    EXPECT_EQ(c.registration_options->driver.iterations, (std::vector<int>{10, 5, 4}));
+    nlohmann::json now = config_to_json(c)["registration_options"];
+    if (method == "icp") {
+      EXPECT_FLOAT_EQ(now["max_dist_m"].get<float>(), 0.2f);
+      EXPECT_FLOAT_EQ(now["t_dof_icp"].get<float>(), 7.0f);
+      EXPECT_FALSE(now.contains("rgb_weight"));
+    } else if (method == "photometric") {
+      EXPECT_FLOAT_EQ(now["occlusion_max_depth_m"].get<float>(), 0.2f);
+      EXPECT_FLOAT_EQ(now["t_dof"].get<float>(), 7.0f);
+      EXPECT_EQ(now["robust_rgb"], "huber");
+      EXPECT_FALSE(now.contains("max_dist_m"));
+    } else if (method == "combined") {
+      EXPECT_FLOAT_EQ(now["max_dist_m"].get<float>(), 0.2f);
+      EXPECT_FLOAT_EQ(now["t_dof"].get<float>(), 7.0f);
+      EXPECT_FLOAT_EQ(now["rgb_weight"].get<float>(), 0.4f);
+    } else {
+      EXPECT_FALSE(now.contains("max_dist_m"));
+    }
+    // A key that was never a registration option is still a mistake.
+    nlohmann::json typo = former;
+    typo["max_dist"] = 0.1;
+    EXPECT_THROW(config_from_json({{"registration", method}, {"registration_options", typo}}, "report.json"), Error);
+  }
 }
 
 }  // namespace

@@ -1,0 +1,82 @@
+// Keyframes: the frames the pipeline keeps to relocalise against and to close loops with.
+//
+//   KeyframeMap map(options);
+//   if (map.wants_keyframe(T_world_camera)) map.add(frame_index, t, T_world_camera, information, depth, colour);
+//   DepthImage d = map.depth(id); ColorImage c = map.colour(id);   // decoded on demand
+//
+// Selection (DVO-SLAM / ElasticFusion style, by motion): a tracked frame becomes a keyframe when the camera moved
+// more than min_translation_m or turned more than min_rotation_deg since the last keyframe, or when
+// max_frames_between frames have passed. Each keyframe stores its pose, its registration information matrix
+// (xi = (omega, v) order), and its depth and colour compressed in memory: depth as a 16-bit PNG in units of
+// 1/5000 m (TUM's unit: lossless for TUM and 7-Scenes depth), colour as a JPEG. When the stored images exceed
+// memory_budget_mb the oldest keyframes' images are dropped (the keyframe keeps its pose and appearance code, but
+// can no longer be registered against): `has_images(id)` says which.
+//
+// Thread-safety: none; the pipeline owns one.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "core/image.h"
+#include "core/se3.h"
+
+namespace hf::slam {
+
+struct KeyframeOptions {
+  // Motion since the last keyframe that makes a new one. 0.1 m / 10 deg give ~1 keyframe per 10-30 frames on
+  // hand-held TUM fr1 (chosen on tum_fr1_rpy_first150; bench/results/tracking.md).
+  double min_translation_m = 0.1;
+  double min_rotation_deg = 10.0;
+  int max_frames_between = 60;     // a keyframe at least this often while tracking (a still camera)
+  double memory_budget_mb = 512.0;  // compressed images of all keyframes together
+  int jpeg_quality = 90;
+
+  void validate() const;  // hf::Error naming the bad field
+};
+
+struct Keyframe {
+  size_t id = 0;            // index in the map, in order of creation
+  size_t frame_index = 0;   // the frame it was made from
+  double timestamp_s = 0.0;
+  SE3 T_world_camera;       // its pose (corrected by loop closure)
+  Matrix6d information = Matrix6d::Zero();  // of the registration that placed it (zero for the first)
+  std::vector<std::uint8_t> depth_png, colour_jpg;  // empty once dropped for the budget
+};
+
+class KeyframeMap {
+ public:
+  explicit KeyframeMap(const KeyframeOptions& options = {});
+
+  // True when a frame at T_world_camera (frame index `frame_index`) should become a keyframe.
+  bool wants_keyframe(const SE3& T_world_camera, size_t frame_index) const;
+  // Stores a keyframe; colour may be empty. Returns its id.
+  size_t add(size_t frame_index, double timestamp_s, const SE3& T_world_camera, const Matrix6d& information,
+             const DepthImage& depth, const ColorImage& colour);
+
+  size_t size() const { return keyframes_.size(); }
+  bool empty() const { return keyframes_.empty(); }
+  const Keyframe& operator[](size_t id) const { return keyframes_.at(id); }
+  void set_pose(size_t id, const SE3& T_world_camera) { keyframes_.at(id).T_world_camera = T_world_camera; }
+  const std::vector<Keyframe>& all() const { return keyframes_; }
+
+  bool has_images(size_t id) const { return !keyframes_.at(id).depth_png.empty(); }
+  // Decoded images (metres; 0 = no depth). Empty images when has_images(id) is false.
+  DepthImage depth(size_t id) const;
+  ColorImage colour(size_t id) const;
+  size_t memory_bytes() const { return bytes_; }
+
+ private:
+  KeyframeOptions options_;
+  std::vector<Keyframe> keyframes_;
+  size_t bytes_ = 0;
+  size_t dropped_ = 0;  // keyframes [0, dropped_) have no images
+};
+
+// Depth (metres) quantised to the 1/5000 m unit keyframes store, so what is integrated and what a keyframe
+// stores are the same numbers (NaN / out of range -> 0).
+void quantise_depth_tum(DepthImage* depth);
+
+}  // namespace hf::slam
