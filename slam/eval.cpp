@@ -42,7 +42,7 @@ std::vector<double> stamps_of(const Trajectory& trajectory) {
 double median_of(std::vector<double> values) {
   std::sort(values.begin(), values.end());
   const size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) * 0.5;
+  return n % 2 == 1 ? values[n / 2] : values[n / 2 - 1] * 0.5 + values[n / 2] * 0.5;
 }
 
 }  // namespace
@@ -52,19 +52,23 @@ ErrorStats compute_error_stats(const std::vector<double>& values) {
   stats.count = values.size();
   if (values.empty()) return stats;
   const double n = double(values.size());
-  double sum = 0.0, sum_sq = 0.0;
-  for (double v : values) {
-    sum += v;
-    sum_sq += v * v;
-  }
-  stats.mean = sum / n;
-  stats.rmse = std::sqrt(sum_sq / n);
-  double var = 0.0;  // two-pass, as numpy.std, instead of sum_sq / n - mean^2 which cancels
-  for (double v : values) var += (v - stats.mean) * (v - stats.mean);
-  stats.std = std::sqrt(var / n);
   const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
   stats.min = *lo;
   stats.max = *hi;
+  // Sums of values scaled by the largest magnitude: finite values up to DBL_MAX give finite statistics (squaring
+  // 1e200 or adding n of 1e308 would overflow to inf and then NaN).
+  const double scale = std::max(std::fabs(*lo), std::fabs(*hi));
+  const double unit = scale > 0.0 && std::isfinite(scale) ? scale : 1.0;
+  double sum = 0.0, sum_sq = 0.0;
+  for (double v : values) {
+    sum += v / unit / n;
+    sum_sq += (v / unit) * (v / unit);
+  }
+  stats.mean = sum * unit;
+  stats.rmse = std::sqrt(sum_sq / n) * unit;
+  double var = 0.0;  // two-pass, as numpy.std, instead of sum_sq / n - mean^2 which cancels
+  for (double v : values) var += (v / unit - stats.mean / unit) * (v / unit - stats.mean / unit) / n;
+  stats.std = std::sqrt(var) * unit;
   stats.median = median_of(values);
   return stats;
 }

@@ -62,6 +62,16 @@ TEST(ErrorStats, NumpySemantics) {
   EXPECT_EQ(compute_error_stats({}).rmse, 0.0);
 }
 
+// Issue 14.9: finite extreme errors gave NaN and inf statistics; scaled sums keep every statistic finite and exact.
+TEST(ErrorStats, FiniteExtremeValuesGiveFiniteStatistics) {
+  const ErrorStats s = compute_error_stats({1e308, 1e308, 0.0, 1e308});
+  EXPECT_DOUBLE_EQ(s.rmse, 1e308 * std::sqrt(0.75));
+  EXPECT_DOUBLE_EQ(s.mean, 0.75e308);
+  EXPECT_DOUBLE_EQ(s.std, 1e308 * std::sqrt(3.0) / 4.0);  // sqrt(0.75 * 0.25)
+  EXPECT_DOUBLE_EQ(s.median, 1e308);
+  EXPECT_DOUBLE_EQ(compute_error_stats({1e-300, 3e-300}).rmse, std::sqrt(5.0) * 1e-300);
+}
+
 TEST(FindClosestIndex, AgreesWithBruteForceNearest) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(0.0, 10.0);
