@@ -83,7 +83,10 @@ PinholeCamera PinholeCamera::parse(const std::string& text, const std::string& f
       throw ParseError(file, line, "expected a JSON camera object");
     }  catch (const nlohmann::json::exception& e) {
       // e.g. a number too large for a double (1e400): out_of_range, not parse_error.
-      throw ParseError(file, 0, std::string("expected a JSON camera object (") + e.what() + ")");
+      const std::string what = e.what();  // "[json.exception.out_of_range.406] number overflow parsing '1e400'"
+      const size_t tag_end = what.find("] ");
+      throw ParseError(file, 0, "expected a JSON camera object, got " +
+                                    quote_for_message(tag_end == std::string::npos ? what : what.substr(tag_end + 2)));
     }
     auto num = [&](const char* key) -> double {
       if (!j.is_object() || !j.contains(key) || !j[key].is_number())
@@ -112,9 +115,11 @@ PinholeCamera PinholeCamera::parse(const std::string& text, const std::string& f
       std::string key;
       if (!(ls >> key)) continue;
       double value;
-      if (!(ls >> value) || !std::isfinite(value)) throw ParseError(file, lineno, "expected " + quote_for_message(key + " <number>") + ", got " + quote_for_message(line));
+      if (!(ls >> value) || !std::isfinite(value))
+        throw ParseError(file, lineno, "expected " + quote_for_message(key + " <number>") + ", got " + quote_for_message(line));
       std::string rest;
-      if (ls >> rest) throw ParseError(file, lineno, "expected one value after " + quote_for_message(key) + ", got " + quote_for_message(rest));
+      if (ls >> rest)
+        throw ParseError(file, lineno, "expected one value after " + quote_for_message(key) + ", got " + quote_for_message(rest));
       static const char* keys[] = {"fx", "fy", "cx", "cy", "width", "height"};
       if (std::find(std::begin(keys), std::end(keys), key) == std::end(keys))
         throw ParseError(file, lineno, "expected one of fx fy cx cy width height, got " + quote_for_message(key));

@@ -1,5 +1,6 @@
 // Fuzzes hf::PinholeCamera::parse (camera.json / camera.txt): a parsed camera is always valid (finite, positive
-// focal lengths and size within the documented limits); every failure is an hf::ParseError.
+// focal lengths and size within the documented limits); every failure is an hf::ParseError with a short printable
+// message.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -8,6 +9,7 @@
 
 #include "core/camera.h"
 #include "core/error.h"
+#include "tests/io/fuzz_message_check.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
@@ -18,6 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       std::abort();
   } catch (const hf::ParseError& e) {
     if (e.file() != "camera.json") std::abort();
+    hf::fuzz::check_message(e, "camera.json");
   }
   return 0;
 }

@@ -1,5 +1,6 @@
 // Fuzzes the TUM rgb.txt / depth.txt parser: any input either parses into sorted, finite, distinct stamps with
-// non-empty names, or throws hf::ParseError. Anything else (crash, other exception) is a finding.
+// non-empty names, or throws hf::ParseError with a short printable message. Anything else (crash, other exception)
+// is a finding. A first line over the length limit is always refused on line 1.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -8,6 +9,7 @@
 
 #include "core/error.h"
 #include "io/tum_dataset.h"
+#include "tests/io/fuzz_message_check.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
@@ -19,6 +21,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
   } catch (const hf::ParseError& e) {
     if (e.file() != "fuzz.txt" || e.line() < 1) std::abort();
+    hf::fuzz::check_message(e, "fuzz.txt");
+  }
+  try {
+    hf::parse_tum_list(hf::fuzz::with_long_first_line(text), "long.txt");
+    std::abort();
+  } catch (const hf::ParseError& e) {
+    if (e.line() != 1 || std::string(e.what()).find("expected a line of at most 4096 bytes") == std::string::npos)
+      std::abort();
   }
   return 0;
 }
