@@ -1,0 +1,63 @@
+// The whole of Kubásková's method on one mesh, stage by stage: topology -> vertex evaluations (discrete, MLS,
+// Laplace-Beltrami) -> head frame -> important areas -> features (manual: the chosen evaluation normalised by
+// eq. 10, thresholded to [a, b], then the morphology steps; automatic: section 4.5's per-area evaluations) ->
+// control points. Each stage is timed.
+//
+// Bad input: hf::Error for a mesh with no triangle, no interior vertex, or fewer than 50 vertices in triangles
+// (head frame). Boundary, non-manifold and isolated vertices and degenerate triangles are not errors: they are
+// counted in `warnings` and their evaluations are invalid (0), so no NaN reaches an output.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "head/automatic_detection.h"
+#include "head/control_points.h"
+#include "head/curvature.h"
+#include "head/feature_spec.h"
+#include "head/head_frame.h"
+#include "head/important_areas.h"
+#include "head/laplace_beltrami.h"
+#include "head/mls_curvature.h"
+#include "head/morphology.h"
+#include "io/mesh.h"
+#include "mesh/topology.h"
+
+namespace hf::head {
+
+struct HeadFeatureOptions {
+  Evaluation evaluation = Evaluation::discrete;  // the manual features' evaluation (--method)
+  Quantity quantity = Quantity::mean;            // which curvature of discrete / mls (Laplace: its magnitude)
+  bool has_threshold = false;  // false: a = the evaluation's average (section 4.5's rule), b = 100
+  ThresholdRange threshold;
+  double truncate_percent = 0;  // section 3.1.3's truncation of the top percentage, before eq. 10
+  std::vector<MorphologyStep> morphology;
+  bool automatic = false;  // section 4.5: per-area evaluations replace the manual features
+  MlsOptions mls;
+  HeadFrameOptions frame;
+  ImportantAreaOptions areas;
+};
+
+struct HeadFeatureResult {
+  MeshTopology topology;
+  VertexCurvatures discrete, mls;  // mls: all vertices for --method mls, else only the eye and ear areas
+  LaplaceBeltrami laplace;
+  std::vector<float> evaluation_percent;  // the manual evaluation after eq. 10
+  float threshold_a = 0, threshold_b = 100;
+  VertexMask features;  // the reported features (manual or automatic)
+  HeadFrame frame;
+  ImportantAreas areas;
+  AreaFeatures area_features;
+  std::vector<ControlPoint> control_points;
+  std::vector<std::string> warnings;
+  std::map<std::string, double> stage_ms;
+};
+
+HeadFeatureResult detect_head_features(const TriangleMesh& mesh, const HeadFeatureOptions& options = {});
+
+// The manual evaluation's raw values (before eq. 10) and validity for the options' evaluation and quantity.
+const std::vector<float>& raw_evaluation(const HeadFeatureResult& r, const HeadFeatureOptions& options,
+                                         const VertexMask** valid);
+
+}  // namespace hf::head
