@@ -79,8 +79,9 @@ struct RunSummary {
 RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const FrameSource& source,
                      const std::string& input);
 
-// report.json: the fields of RunSummary (null where absent), "ms_per_frame" {read, preprocess, track, integrate,
-// raycast, total}, "config" (config_to_json), per-frame states, and the camera.
+// report.json: the fields of RunSummary (null where absent), "stopped_by" (SequenceRun::stopped_by, null when the
+// loop ran to its end or was interrupted), "ms_per_frame" {read, preprocess, track, integrate, raycast, total},
+// "config" (config_to_json), per-frame states, and the camera; write_run_outputs adds "outputs".
 nlohmann::json summary_to_json(const RunSummary& summary, const SequenceRun& run, const Pipeline& pipeline,
                                const FrameSource& source);
 
