@@ -33,6 +33,7 @@
 #include "io/dataset.h"
 #include "registration/frame_pyramid.h"
 #include "registration/cpu_backend.h"
+#include "registration/gauss_newton.h"
 #include "registration/registration.h"
 #ifdef HF_BENCH_HAVE_OPENCL
 #include "registration/opencl/opencl_backend.h"
@@ -263,7 +264,7 @@ int run_lambda_sweep(int max_pairs) {
     std::vector<Row> rows;
     for (const float lambda : lambdas) {
       RegistrationOptions o = default_registration_options("combined");
-      o.rgb_weight = lambda;
+      o.set("rgb_weight", double(lambda));
       regs.push_back(make_registration("combined", o, make_backend("cpu")));
       char label[32];
       std::snprintf(label, sizeof(label), "%g", double(lambda));
@@ -361,53 +362,43 @@ void BM_Align(benchmark::State& state, const std::string& method, const std::str
   }
 }
 
-// One reduction (one Gauss-Newton iteration's normal equations) at pyramid level `level` of the 640x480 pair,
-// inputs already on the device.
-ResidualProblem level_problem(int method, int level = 0) {
+// One reduction (one Gauss-Newton iteration's normal equations) at pyramid level `level` of the 640x480 pair for a
+// registered per-pixel method, inputs already on the device. Its default options except: photometric rows on every
+// finest-level pixel, no gradient threshold and Student-t weights on them (the problem this benchmark has always
+// timed). `holder` keeps the method the problem points into.
+ResidualProblem level_problem(const std::string& method, int level, std::unique_ptr<Registration>& holder) {
   const Pair& pair = bench_pair();
-  const FramePyramidLevel& c = pair.cur.levels[size_t(level)];
-  const FramePyramidLevel& r = pair.ref.levels[size_t(level)];
-  ResidualProblem p;
-  p.camera = hf_intrinsics{float(c.camera.fx), float(c.camera.fy), float(c.camera.cx), float(c.camera.cy),
-                           c.camera.width, c.camera.height};
-  p.cur_vertices = c.vertices.data();
-  p.cur_normals = c.normals.data();
-  p.cur_intensity = c.intensity.data();
-  p.ref_vertices = r.vertices.data();
-  p.ref_normals = r.normals.data();
-  p.ref_intensity = r.intensity.data();
-  p.ref_grad_x = r.grad_x.data();
-  p.ref_grad_y = r.grad_y.data();
-  p.T_ref_cur = to_transform12(pair.T_ref_cur_true);
-  p.params.method = method;
-  p.params.max_dist_m = 0.1f;
-  p.params.min_normal_cos = 0.866f;
-  p.params.icp_weight = 1.0f;
-  p.params.rgb_weight = method == HF_REG_COMBINED ? 0.1f : 1.0f;
-  p.params.robust_icp = HF_ROBUST_HUBER;
-  p.params.scale_icp = 0.01f;
-  p.params.robust_rgb = HF_ROBUST_STUDENT_T;
-  p.params.scale_rgb = 0.05f;
-  p.params.t_dof = 5.0f;
-  p.params.occlusion_check = 1;
+  RegistrationOptions options = default_registration_options(method);
+  options.set("finest_level_photometric_step", 1);
+  options.set("min_gradient", 0.0);
+  options.for_each_option([](const char* key, auto& field) {
+    if constexpr (std::is_same_v<std::remove_reference_t<decltype(field)>, RobustKernel>) {
+      if (std::strcmp(key, "robust_rgb") == 0) field = RobustKernel::student_t;
+    }
+  });
+  holder = make_registration(method, options, make_backend("cpu"));
+  auto* gn = dynamic_cast<GaussNewtonRegistration*>(holder.get());
+  if (gn == nullptr) throw Error(method + " is not a per-pixel method");
+  ResidualProblem p = gn->level_problem(pair.cur, pair.ref, level, pair.T_ref_cur_true);
   p.inputs_version = 1;
   return p;
 }
 
-void run_reduce(benchmark::State& state, ReductionBackend& backend, int method, int level = 0) {
-  const ResidualProblem p = level_problem(method, level);
+void run_reduce(benchmark::State& state, ReductionBackend& backend, const std::string& method, int level = 0) {
+  std::unique_ptr<Registration> holder;
+  const ResidualProblem p = level_problem(method, level, holder);
   NormalEquations ne = backend.reduce(p);  // uploads
   for (auto _ : state) ne = backend.reduce(p);
   state.counters["rows"] = double(ne.count);
 }
 
-void BM_Reduce_cpu(benchmark::State& state, int method) {
+void BM_Reduce_cpu(benchmark::State& state, const std::string& method) {
   CpuReductionBackend backend;
   run_reduce(state, backend, method, int(state.range(0)));
 }
 
 #ifdef HF_BENCH_HAVE_OPENCL
-void BM_Reduce_opencl(benchmark::State& state, int method) {
+void BM_Reduce_opencl(benchmark::State& state, const std::string& method) {
   opencl::OpenClBackendOptions options;
   options.pixels_per_item = int(state.range(0));
   options.max_work_group_size = std::size_t(state.range(1));
@@ -424,9 +415,8 @@ void BM_Reduce_opencl(benchmark::State& state, int method) {
 #endif
 
 void register_benchmarks() {
-  const std::pair<const char*, int> methods[] = {
-      {"icp", HF_REG_ICP}, {"photometric", HF_REG_PHOTOMETRIC}, {"combined", HF_REG_COMBINED}};
-  for (const auto& [name, id] : methods) {
+  for (const std::string& name : registration_names()) {
+    const std::string& id = name;
     // Argument: pyramid level (0 = 640x480).
     benchmark::RegisterBenchmark((std::string("BM_Reduce/") + name + "/cpu").c_str(), BM_Reduce_cpu, id)
         ->Arg(0)

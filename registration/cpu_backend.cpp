@@ -6,8 +6,7 @@
 #include <algorithm>
 
 #include "core/error.h"
-#include "registration/cpu_backend_avx2.h"
-#include "registration/kernels/residuals.h"
+#include "core/simd_avx2.h"
 
 namespace hf {
 
@@ -16,29 +15,16 @@ CpuReductionBackend::CpuReductionBackend(int rows_per_chunk, bool vectorised)
 
 NormalEquations CpuReductionBackend::reduce(const ResidualProblem& problem) {
   validate_problem(problem);
-  const int height = problem.height(), width = problem.width();
+  const int height = problem.height();
   const int chunks = (height + rows_per_chunk_ - 1) / rows_per_chunk_;
   chunk_sums_.assign(size_t(chunks) * HF_REG_SUMS, 0.0);
-  const ResidualProblem& p = problem;
-  const int step = p.params.method == HF_REG_PHOTOMETRIC ? std::max(1, p.params.photometric_step) : 1;
+  // A method without an eight-lane spelling runs its scalar loop here: never no rows.
+  const RowsFunction rows =
+      vectorised_ && problem.kernel->rows_avx2 != nullptr ? problem.kernel->rows_avx2 : problem.kernel->rows;
   tbb::parallel_for(tbb::blocked_range<int>(0, chunks), [&](const tbb::blocked_range<int>& range) {
     for (int c = range.begin(); c != range.end(); ++c) {
-      double* sums = chunk_sums_.data() + size_t(c) * HF_REG_SUMS;
       const int y0 = c * rows_per_chunk_, y1 = std::min(height, y0 + rows_per_chunk_);
-      if (vectorised_) {
-        detail::accumulate_rows_avx2(p, y0, y1, sums);
-        continue;
-      }
-      // Photometric pixels off the photometric_step grid give no rows (hf_reg_pixel); skipping them here only
-      // saves the calls.
-      for (int y = y0; y < y1; ++y) {
-        if (y % step != 0) continue;
-        for (int x = 0; x < width; x += step) {
-          hf_reg_accumulate_pixel(x, y, p.cur_vertices, p.cur_normals, p.cur_intensity, p.ref_vertices,
-                                  p.ref_normals, p.ref_intensity, p.ref_grad_x, p.ref_grad_y, p.camera,
-                                  p.T_ref_cur, p.params, sums);
-        }
-      }
+      rows(problem, y0, y1, chunk_sums_.data() + size_t(c) * HF_REG_SUMS);
     }
   });
   double total[HF_REG_SUMS] = {};
@@ -47,6 +33,10 @@ NormalEquations CpuReductionBackend::reduce(const ResidualProblem& problem) {
     for (int k = 0; k < HF_REG_SUMS; ++k) total[k] += sums[k];
   }
   return NormalEquations::from_sums(total);
+}
+
+bool CpuReductionBackend::vectorises(const DenseKernel& kernel) const {
+  return vectorised_ && kernel.rows_avx2 != nullptr;
 }
 
 }  // namespace hf

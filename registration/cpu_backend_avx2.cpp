@@ -12,7 +12,7 @@
 
 #include "core/error.h"
 #include "core/simd_avx2.h"
-#include "registration/kernels/reg_common.h"
+#include "registration/kernels/combined_kernel.h"
 
 namespace hf::detail {
 
@@ -73,13 +73,14 @@ HF_AVX2_INLINE Lanes3 transform(const hf_transform12& T, const Lanes4& p, bool t
   return out;
 }
 
-// hf_reg_robust_weight.
-HF_AVX2_INLINE __m256 robust_weight(int robust, __m256 r, float scale, float dof) {
-  if (robust == HF_ROBUST_HUBER) {
+// hf_reg_term_weight.
+HF_AVX2_INLINE __m256 robust_weight(const hf_reg_robust& robust, __m256 r) {
+  const float scale = robust.scale, dof = robust.t_dof;
+  if (robust.type == HF_ROBUST_HUBER) {
     const __m256 a = _mm256_andnot_ps(splat(-0.0f), r);
     return _mm256_blendv_ps(_mm256_div_ps(splat(scale), a), splat(1.0f), cmp_le(a, splat(scale)));
   }
-  if (robust == HF_ROBUST_STUDENT_T) {
+  if (robust.type == HF_ROBUST_STUDENT_T) {
     const __m256 u = _mm256_div_ps(r, splat(scale));
     return _mm256_div_ps(splat(dof + 1.0f), add(splat(dof), mul(u, u)));
   }
@@ -162,12 +163,17 @@ HF_AVX2_INLINE Pixels8 pixels(int x0, int step, int y, int width) {
   return {_mm256_and_si256(index, in), _mm256_castsi256_ps(in)};
 }
 
+// The problem's map at `slot` (the driver filled it with the pyramid's map of that element type).
+template <class T>
+HF_AVX2_INLINE const T* map(const ResidualProblem& p, int slot) {
+  return static_cast<const T*>(p.maps[slot].data);
+}
+
 // hf_icp_pixel for eight pixels; false when no lane has a row.
-HF_AVX2_INLINE bool icp_rows(const ResidualProblem& p, const Pixels8& px8, Rows8* rows) {
+HF_AVX2_INLINE bool icp_rows(const ResidualProblem& p, const hf_icp_params& prm, const Pixels8& px8, Rows8* rows) {
   const hf_intrinsics& K = p.camera;
-  const hf_reg_params& prm = p.params;
-  const Lanes4 vc = gather4(p.cur_vertices, px8.index);
-  const Lanes4 nc = gather4(p.cur_normals, px8.index);
+  const Lanes4 vc = gather4(map<hf_float4>(p, HF_REG_IN_CUR_VERTICES), px8.index);
+  const Lanes4 nc = gather4(map<hf_float4>(p, HF_REG_IN_CUR_NORMALS), px8.index);
   const __m256 zero = _mm256_setzero_ps();
   __m256 valid = and_(px8.inside, and_(cmp_ne(vc.w, zero), cmp_ne(nc.w, zero)));
   const Lanes3 v = transform(p.T_ref_cur, vc, true);
@@ -182,8 +188,8 @@ HF_AVX2_INLINE bool icp_rows(const ResidualProblem& p, const Pixels8& px8, Rows8
   const __m256i wi = _mm256_cvttps_epi32(add(w, splat(0.5f)));
   __m256i ridx = _mm256_add_epi32(_mm256_mullo_epi32(wi, _mm256_set1_epi32(K.width)), ui);
   ridx = _mm256_and_si256(ridx, _mm256_castps_si256(valid));
-  const Lanes4 vr = gather4(p.ref_vertices, ridx);
-  const Lanes4 nr = gather4(p.ref_normals, ridx);
+  const Lanes4 vr = gather4(map<hf_float4>(p, HF_REG_IN_REF_VERTICES), ridx);
+  const Lanes4 nr = gather4(map<hf_float4>(p, HF_REG_IN_REF_NORMALS), ridx);
   valid = and_(valid, and_(cmp_ne(vr.w, zero), cmp_ne(nr.w, zero)));
   const Lanes3 d{sub(vr.x, v.x), sub(vr.y, v.y), sub(vr.z, v.z)};
   valid = and_(valid, cmp_le(dot3(d, d), splat(prm.max_dist_m * prm.max_dist_m)));
@@ -191,7 +197,7 @@ HF_AVX2_INLINE bool icp_rows(const ResidualProblem& p, const Pixels8& px8, Rows8
   const Lanes3 n{nr.x, nr.y, nr.z};
   valid = and_(valid, cmp_ge(dot3(rn, n), splat(prm.min_normal_cos)));
   const __m256 r = dot3(d, n);
-  const __m256 weight = mul(splat(prm.icp_weight), robust_weight(prm.robust_icp, r, prm.scale_icp, prm.t_dof));
+  const __m256 weight = mul(splat(prm.weight), robust_weight(prm.robust, r));
   const __m256 minus = splat(-1.0f);
   set_rows(v, Lanes3{mul(n.x, minus), mul(n.y, minus), mul(n.z, minus)}, r, weight, valid, rows);
   return !none(valid);
@@ -239,11 +245,11 @@ HF_AVX2_INLINE __m256 bilinear_sample(const float* img, const Bilinear& b) {
   return v;
 }
 
-// hf_photometric_pixel for eight pixels; false when no lane has a row.
-HF_AVX2_INLINE bool photometric_rows(const ResidualProblem& p, const Pixels8& px8, Rows8* rows) {
+// hf_photometric_pixel for eight pixels on its step grid; false when no lane has a row.
+HF_AVX2_INLINE bool photometric_rows(const ResidualProblem& p, const hf_photometric_params& prm, const Pixels8& px8,
+                                     Rows8* rows) {
   const hf_intrinsics& K = p.camera;
-  const hf_reg_params& prm = p.params;
-  const Lanes4 vc = gather4(p.cur_vertices, px8.index);
+  const Lanes4 vc = gather4(map<hf_float4>(p, HF_REG_IN_CUR_VERTICES), px8.index);
   const __m256 zero = _mm256_setzero_ps();
   __m256 valid = and_(px8.inside, cmp_ne(vc.w, zero));
   const Lanes3 v = transform(p.T_ref_cur, vc, true);
@@ -256,62 +262,77 @@ HF_AVX2_INLINE bool photometric_rows(const ResidualProblem& p, const Pixels8& px
   // Rejected lanes sample at (0, 0): their coordinates may be NaN or far outside.
   const __m256 us = and_(u, valid), ws = and_(w, valid);
   const Bilinear taps = bilinear_taps(us, ws, valid, K.width, K.height);
-  const __m256 i_ref = bilinear_sample(p.ref_intensity, taps);
-  const __m256 gx = bilinear_sample(p.ref_grad_x, taps);
-  const __m256 gy = bilinear_sample(p.ref_grad_y, taps);
+  const __m256 i_ref = bilinear_sample(map<float>(p, HF_REG_IN_REF_INTENSITY), taps);
+  const __m256 gx = bilinear_sample(map<float>(p, HF_REG_IN_REF_GRAD_X), taps);
+  const __m256 gy = bilinear_sample(map<float>(p, HF_REG_IN_REF_GRAD_Y), taps);
   valid = and_(valid, cmp_ge(add(mul(gx, gx), mul(gy, gy)), splat(prm.min_gradient_sq)));
   if (prm.occlusion_check) {
     const __m256i ui = _mm256_cvttps_epi32(add(us, splat(0.5f)));
     const __m256i wi = _mm256_cvttps_epi32(add(ws, splat(0.5f)));
     __m256i ridx = _mm256_add_epi32(_mm256_mullo_epi32(wi, _mm256_set1_epi32(K.width)), ui);
     ridx = _mm256_and_si256(ridx, _mm256_castps_si256(valid));
-    const float* base = reinterpret_cast<const float*>(p.ref_vertices);
+    const float* base = map<float>(p, HF_REG_IN_REF_VERTICES);
     const __m256i i4 = _mm256_slli_epi32(ridx, 2);
     const __m256 vr_z = gather(base + 2, i4), vr_w = gather(base + 3, i4);
     const __m256 occluded =
-        and_(cmp_ne(vr_w, zero), cmp_gt(_mm256_andnot_ps(splat(-0.0f), sub(vr_z, v.z)), splat(prm.max_dist_m)));
+        and_(cmp_ne(vr_w, zero), cmp_gt(_mm256_andnot_ps(splat(-0.0f), sub(vr_z, v.z)), splat(prm.occlusion_max_depth_m)));
     valid = _mm256_andnot_ps(occluded, valid);
   }
-  const __m256 r = sub(i_ref, gather(p.cur_intensity, px8.index));
+  const __m256 r = sub(i_ref, gather(map<float>(p, HF_REG_IN_CUR_INTENSITY), px8.index));
   const __m256 inv_z = _mm256_div_ps(splat(1.0f), v.z);
   const __m256 ax = mul(mul(gx, splat(K.fx)), inv_z);
   const __m256 ay = mul(mul(gy, splat(K.fy)), inv_z);
   const __m256 az = mul(_mm256_xor_ps(add(mul(ax, v.x), mul(ay, v.y)), splat(-0.0f)), inv_z);
-  const __m256 weight = mul(splat(prm.rgb_weight), robust_weight(prm.robust_rgb, r, prm.scale_rgb, prm.t_dof));
+  const __m256 weight = mul(splat(prm.weight), robust_weight(prm.robust, r));
   set_rows(v, Lanes3{ax, ay, az}, r, weight, valid, rows);
   return !none(valid);
 }
 
-}  // namespace
-
-HF_AVX2 void accumulate_rows_avx2(const ResidualProblem& p, int y_begin, int y_end, double* sums) {
-  const int m = p.params.method;
-  const bool geometric = m == HF_REG_ICP || m == HF_REG_COMBINED;
-  const bool photometric = m == HF_REG_PHOTOMETRIC || m == HF_REG_COMBINED;
-  const int step = p.params.photometric_step > 1 ? p.params.photometric_step : 1;
+// The rows hf_combined_pixel() writes for rows [y_begin, y_end), either term alone when the other is null: the
+// geometric rows of every pixel, then the photometric rows of the pixels on its step grid.
+HF_AVX2_INLINE void rows_avx2(const ResidualProblem& p, const hf_icp_params* icp, const hf_photometric_params* pho,
+                              int y_begin, int y_end, double* sums) {
+  const int step = pho != nullptr && pho->step > 1 ? pho->step : 1;
   const int width = p.width();
   Accumulator acc;
   Rows8 rows;
   for (int y = y_begin; y < y_end; ++y) {
-    if (geometric) {
+    if (icp != nullptr) {
       for (int x = 0; x < width; x += 8) {
-        if (icp_rows(p, pixels(x, 1, y, width), &rows)) acc.add(rows);
+        if (icp_rows(p, *icp, pixels(x, 1, y, width), &rows)) acc.add(rows);
       }
     }
-    if (photometric && y % step == 0) {
+    if (pho != nullptr && y % step == 0) {
       for (int x = 0; x < width; x += 8 * step) {
-        if (photometric_rows(p, pixels(x, step, y, width), &rows)) acc.add(rows);
+        if (photometric_rows(p, *pho, pixels(x, step, y, width), &rows)) acc.add(rows);
       }
     }
   }
   acc.flush(sums);
 }
 
+}  // namespace
+
+HF_AVX2 void icp_rows_avx2(const ResidualProblem& p, int y_begin, int y_end, double* sums) {
+  rows_avx2(p, static_cast<const hf_icp_params*>(p.params), nullptr, y_begin, y_end, sums);
+}
+
+HF_AVX2 void photometric_rows_avx2(const ResidualProblem& p, int y_begin, int y_end, double* sums) {
+  rows_avx2(p, nullptr, static_cast<const hf_photometric_params*>(p.params), y_begin, y_end, sums);
+}
+
+HF_AVX2 void combined_rows_avx2(const ResidualProblem& p, int y_begin, int y_end, double* sums) {
+  const auto* params = static_cast<const hf_combined_params*>(p.params);
+  rows_avx2(p, &params->icp, &params->photometric, y_begin, y_end, sums);
+}
+
 #else
 
-void accumulate_rows_avx2(const ResidualProblem&, int, int, double*) {
-  throw Error("accumulate_rows_avx2: this build has no AVX2 path");
+void icp_rows_avx2(const ResidualProblem&, int, int, double*) { throw Error("this build has no AVX2 path"); }
+void photometric_rows_avx2(const ResidualProblem&, int, int, double*) {
+  throw Error("this build has no AVX2 path");
 }
+void combined_rows_avx2(const ResidualProblem&, int, int, double*) { throw Error("this build has no AVX2 path"); }
 
 #endif
 

@@ -49,32 +49,33 @@ hf_transform12 to_transform12(const SE3& T) {
   return out;
 }
 
+hf_reg_maps ResidualProblem::kernel_maps() const {
+  hf_reg_maps m;
+  for (int i = 0; i < HF_REG_MAX_INPUTS; ++i) m.map[i] = static_cast<const float*>(maps[i].data);
+  return m;
+}
+
 void validate_problem(const ResidualProblem& problem) {
   if (problem.camera.width <= 0 || problem.camera.height <= 0) {
     throw Error("registration problem: image size " + std::to_string(problem.camera.width) + "x" +
                 std::to_string(problem.camera.height) + " is not positive");
   }
-  const int m = problem.params.method;
-  if (m != HF_REG_ICP && m != HF_REG_PHOTOMETRIC && m != HF_REG_COMBINED) {
-    throw Error("registration problem: unknown method id " + std::to_string(m));
+  const DenseKernel* k = problem.kernel;
+  if (k == nullptr || k->rows == nullptr) throw Error("registration problem: no kernel");
+  if (problem.params == nullptr) throw Error(std::string("registration problem: ") + k->name + ": no parameters");
+  for (int slot = 0; slot < HF_REG_MAX_INPUTS; ++slot) {
+    if ((k->inputs & HF_REG_IN_BIT(slot)) != 0 && problem.maps[slot].data == nullptr) {
+      throw Error(std::string("registration problem: ") + k->name + ": input map " + reg_input_name(slot) +
+                  " is missing");
+    }
   }
-  const bool geometric = m != HF_REG_PHOTOMETRIC, photometric = m != HF_REG_ICP;
-  auto need = [](const void* ptr, const char* what) {
-    if (ptr == nullptr) throw Error(std::string("registration problem: ") + what + " is missing");
-  };
-  need(problem.cur_vertices, "cur_vertices");
-  if (geometric) {
-    need(problem.cur_normals, "cur_normals");
-    need(problem.ref_vertices, "ref_vertices");
-    need(problem.ref_normals, "ref_normals");
-  }
-  if (photometric) {
-    need(problem.cur_intensity, "cur_intensity");
-    need(problem.ref_intensity, "ref_intensity");
-    need(problem.ref_grad_x, "ref_grad_x");
-    need(problem.ref_grad_y, "ref_grad_y");
-    if (problem.params.occlusion_check) need(problem.ref_vertices, "ref_vertices");
-  }
+}
+
+const char* reg_input_name(int slot) {
+  static const char* const names[HF_REG_MAX_INPUTS] = {
+      "cur_vertices", "cur_normals", "cur_intensity", "ref_vertices", "ref_normals", "ref_intensity",
+      "ref_grad_x",   "ref_grad_y",  "method0",       "method1",      "method2",     "method3"};
+  return slot >= 0 && slot < HF_REG_MAX_INPUTS ? names[slot] : "?";
 }
 
 std::vector<std::string> backend_names() { return {"cpu", "opencl"}; }

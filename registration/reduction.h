@@ -1,5 +1,6 @@
-// Reduction backends: evaluate one level's per-pixel rows (registration/kernels/residuals.h) and reduce them to
-// the 29 values of the normal equations (order in registration/kernels/reg_common.h).
+// Reduction backends: evaluate one level's per-pixel rows of a method's kernel (ResidualProblem::kernel, built from
+// its registration/kernels/<method>_kernel.h) and reduce them to the 29 values of the normal equations (order in
+// registration/kernels/reg_common.h). A backend consults only the kernel's descriptor, never a method name.
 //
 //   auto backend = hf::make_backend("cpu");             // or "opencl"
 //   hf::NormalEquations ne = backend->reduce(problem);  // H = ne.JtJ, g = ne.Jtr; solve H xi = -g
@@ -8,6 +9,7 @@
 // Thread-safety: a backend object is used by one thread at a time (reduce() may use many threads inside).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -32,28 +34,53 @@ struct NormalEquations {
   std::vector<double> to_sums() const;
 };
 
-// One level's inputs for one method. All maps are camera.width x camera.height, row-major, and are owned by the
-// caller (they must outlive reduce()). Frames: see registration/kernels/reg_common.h (v = T_ref_cur v_cur).
+struct ResidualProblem;
+
+// Sums the rows of current-frame pixel rows [y_begin, y_end) of `problem` into sums (HF_REG_SUMS doubles, the
+// order of registration/kernels/reg_common.h). Called concurrently for disjoint row ranges.
+using RowsFunction = void (*)(const ResidualProblem& problem, int y_begin, int y_end, double* sums);
+
+// A per-pixel least-squares method as the backends see it (registration/dense_method.h builds one from a kernel
+// header). Static data: one per method, alive for the whole program.
+struct DenseKernel {
+  const char* name = "";   // the registry name; the OpenCL kernel is hf_reg_reduce_<name>
+  unsigned inputs = 0;     // HF_REG_IN_BIT() of every map slot the pixel function reads
+  int max_rows = 1;        // rows per pixel, at most (<= HF_REG_MAX_ROWS)
+  std::size_t params_bytes = 0;  // sizeof the kernel's parameter struct (passed by value to OpenCL)
+  // The scalar per-pixel function of the kernel header, for one pixel (tests, references).
+  int (*pixel)(int x, int y, const hf_reg_maps* maps, hf_intrinsics K, hf_transform12 T, const void* params,
+               hf_reg_row* rows) = nullptr;
+  RowsFunction rows = nullptr;       // the pixel function over rows, summed in double (the "cpu" backend)
+  RowsFunction rows_avx2 = nullptr;  // the same rows eight pixels at a time; null: the cpu backend runs `rows`
+  // OpenCL C source of the kernel (its header's text) for a method whose kernel is not in the embedded program
+  // (one registered at run time); empty for the built-in methods.
+  const char* opencl_source = "";
+};
+
+// One level's inputs for one method: its kernel, the maps it reads, its parameters. The maps and params are owned
+// by the caller (they must outlive reduce()). Frames: see registration/kernels/reg_common.h (v = T_ref_cur v_cur).
 struct ResidualProblem {
+  struct Map {
+    const void* data = nullptr;
+    std::size_t bytes_per_pixel = 0;  // sizeof(hf_float4) or sizeof(float) for the pyramid's maps
+  };
+  const DenseKernel* kernel = nullptr;
   hf_intrinsics camera{};  // intrinsics and size of this level (shared by the current and the reference maps)
-  // Current frame (t+1).
-  const hf_float4* cur_vertices = nullptr;  // camera frame, metres, w = 1 valid
-  const hf_float4* cur_normals = nullptr;   // unit, w = 1 valid
-  const float* cur_intensity = nullptr;     // [0, 1]
-  // Reference frame (t): model maps or the previous frame.
-  const hf_float4* ref_vertices = nullptr;
-  const hf_float4* ref_normals = nullptr;
-  const float* ref_intensity = nullptr;
-  const float* ref_grad_x = nullptr;  // intensity units per pixel
-  const float* ref_grad_y = nullptr;
+  Map maps[HF_REG_MAX_INPUTS];  // by HF_REG_IN_* slot: camera.width x camera.height, row-major
   hf_transform12 T_ref_cur{};  // the current estimate (rotation row-major, then translation)
-  hf_reg_params params{};      // method, rejection thresholds, term weights, robust kernels and scales
+  const void* params = nullptr;  // the kernel's parameter struct (kernel->params_bytes)
+  // Only current pixels with x and y multiples of this can give rows (a hint: backends may skip the others).
+  int pixel_step = 1;
   // Changes whenever any map pointer or its contents change (the driver bumps it per registration call and
   // level); constant across the iterations of one level, so a backend may keep uploaded copies while it matches.
   std::uint64_t inputs_version = 0;
 
   int width() const { return camera.width; }
   int height() const { return camera.height; }
+  // The maps as the kernels read them.
+  hf_reg_maps kernel_maps() const;
+  void set_map(int slot, const hf_float4* data) { maps[slot] = {data, sizeof(hf_float4)}; }
+  void set_map(int slot, const float* data) { maps[slot] = {data, sizeof(float)}; }
 };
 
 // hf_transform12 of an SE3 (float).
@@ -74,7 +101,9 @@ class ReductionBackend {
 std::unique_ptr<ReductionBackend> make_backend(const std::string& name = "cpu");
 std::vector<std::string> backend_names();
 
-// Checks the pointers the method reads and the size; throws hf::Error naming the problem.
+// Checks the kernel, the pointers it reads, the params and the size; throws hf::Error naming the problem.
 void validate_problem(const ResidualProblem& problem);
+// "cur_vertices", ... for an HF_REG_IN_* slot (messages).
+const char* reg_input_name(int slot);
 
 }  // namespace hf

@@ -1,6 +1,6 @@
 // Frame registration: the `Registration` interface and its string-keyed registry.
 //
-//   auto reg = hf::make_registration("combined");          // "icp", "photometric", "combined"
+//   auto reg = hf::make_registration("combined");          // any of registration_names()
 //   hf::RegistrationResult res = reg->align(cur, ref, T_ref_cur_guess);
 //   if (res.usable()) T_world_cur = T_world_ref * res.T_ref_cur;
 //
@@ -15,9 +15,10 @@
 #pragma once
 
 #include <array>
-#include <functional>
 #include <memory>
+#include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/se3.h"
@@ -36,6 +37,142 @@ enum class RegistrationStatus {
 const char* to_string(RegistrationStatus status);
 
 enum class RobustKernel { none, huber, student_t };
+
+// Visits named option fields: how a caller reads and writes options (e.g. the pipeline's JSON config) without
+// knowing any method. Keys are the option names users type; one key names one field.
+class OptionVisitor {
+ public:
+  virtual ~OptionVisitor() = default;
+  virtual void operator()(const char* key, int& value) = 0;
+  virtual void operator()(const char* key, long& value) = 0;
+  virtual void operator()(const char* key, float& value) = 0;
+  virtual void operator()(const char* key, double& value) = 0;
+  virtual void operator()(const char* key, bool& value) = 0;
+  virtual void operator()(const char* key, std::vector<int>& value) = 0;
+  virtual void operator()(const char* key, RobustKernel& value) = 0;
+};
+
+// An OptionVisitor from any callable v(key, field) with overloads (or a template) for the seven field types.
+template <class F>
+class OptionVisitorFor final : public OptionVisitor {
+ public:
+  explicit OptionVisitorFor(F& f) : f_(f) {}
+  void operator()(const char* key, int& value) override { f_(key, value); }
+  void operator()(const char* key, long& value) override { f_(key, value); }
+  void operator()(const char* key, float& value) override { f_(key, value); }
+  void operator()(const char* key, double& value) override { f_(key, value); }
+  void operator()(const char* key, bool& value) override { f_(key, value); }
+  void operator()(const char* key, std::vector<int>& value) override { f_(key, value); }
+  void operator()(const char* key, RobustKernel& value) override { f_(key, value); }
+
+ private:
+  F& f_;
+};
+
+// A method's own knobs (registration/icp.h IcpOptions, ...), with their defaults where they are declared.
+class MethodOptions {
+ public:
+  virtual ~MethodOptions() = default;
+  virtual std::unique_ptr<MethodOptions> clone() const = 0;
+  virtual void visit(OptionVisitor& v) = 0;  // every knob by its key
+  virtual void validate() const = 0;         // hf::Error naming the first bad field
+};
+
+// Helper for MethodOptions implementations: clone() as a copy.
+template <class Derived>
+class MethodOptionsBase : public MethodOptions {
+ public:
+  std::unique_ptr<MethodOptions> clone() const override {
+    return std::make_unique<Derived>(static_cast<const Derived&>(*this));
+  }
+};
+
+// The settings of the Gauss-Newton driver (registration/gauss_newton.h), shared by every method. The numbers
+// behind each default: bench/results/registration.md ("Driver defaults").
+struct GaussNewtonOptions {
+  // Iterations per pyramid level, [0] finest: KinectFusion's 4/5/10 coarse to fine. Its size is the number of
+  // levels used (at most the pyramids' levels).
+  std::vector<int> iterations = {10, 5, 4};
+  // Convergence: stop a level when the step is below both (radians, metres); 1e-5 moves a point at 2 m by
+  // ~0.005 px at 640x480.
+  double min_step_rotation_rad = 1e-5;
+  double min_step_translation_m = 1e-5;
+  // Degeneracy (Zhang et al. 2016): eigen-directions of the balanced information with lambda_i < threshold *
+  // lambda_max are not updated. 3e-3: 2x above the wall preset's noise floor, 1.7x below the corridor's axis.
+  double degeneracy_threshold = 3e-3;
+  // Outcome checks.
+  long min_inliers = 64;              // fewer at the finest level: no_data (0 rows) or failed
+  double poor_inlier_ratio = 0.3;     // below: poor
+  double max_translation_m = 0.5;     // |t| of T_guess^-1 T_result beyond: failed (never a wild pose)
+  double max_rotation_deg = 45.0;
+  // A result that moved more than verify_motion_m or verify_motion_deg from the initial guess is re-checked by
+  // aligning the reference onto the current frame, and reported failed unless the loop T_fwd T_rev is within
+  // verify_agreement_m / _deg of the identity (5 cm / 10 deg: above every consecutive TUM fr1 pair).
+  double verify_motion_m = 0.05;
+  double verify_motion_deg = 10.0;
+  double verify_agreement_m = 0.01;
+  double verify_agreement_deg = 0.5;
+  // The last finest-level step must be below these, else the estimate was still sliding: failed (converged
+  // real frames end near 1e-4 under changing IRLS weights).
+  double max_final_step_translation_m = 2e-3;
+  double max_final_step_rotation_rad = 2e-3;
+
+  void visit(OptionVisitor& v);
+  void validate() const;  // hf::Error naming the first bad field
+};
+
+// A method's options in force: the driver's settings and the method's own knobs (null for a placeholder, e.g. the
+// pipeline's "groundtruth"). Copies deep-copy the method's options.
+class RegistrationOptions {
+ public:
+  RegistrationOptions() = default;
+  RegistrationOptions(const GaussNewtonOptions& driver, std::unique_ptr<MethodOptions> method);
+  RegistrationOptions(const RegistrationOptions& other);
+  RegistrationOptions& operator=(const RegistrationOptions& other);
+  RegistrationOptions(RegistrationOptions&&) noexcept = default;
+  RegistrationOptions& operator=(RegistrationOptions&&) noexcept = default;
+
+  GaussNewtonOptions driver;
+
+  const MethodOptions* method() const { return method_.get(); }
+  MethodOptions* method() { return method_.get(); }
+  // The method's options as their type; hf::Error when they are absent or of another method.
+  template <class T>
+  T& method_as() {
+    T* m = dynamic_cast<T*>(method_.get());
+    if (m == nullptr) throw_wrong_method();
+    return *m;
+  }
+  template <class T>
+  const T& method_as() const {
+    return const_cast<RegistrationOptions*>(this)->method_as<T>();
+  }
+  // The driver's keys, then the method's: one flat namespace (no key appears twice).
+  void visit(OptionVisitor& v);
+  // The same with a callable f(key, field&), e.g. a generic lambda.
+  template <class F>
+  void for_each_option(F&& f) {
+    OptionVisitorFor<std::remove_reference_t<F>> v(f);
+    visit(v);
+  }
+  // Sets the numeric option `key` when it exists; false when neither the driver nor the method has it.
+  bool set(const std::string& key, double value);
+  // Throws hf::Error naming the first bad field.
+  void validate() const;
+
+ private:
+  [[noreturn]] static void throw_wrong_method();
+  std::unique_ptr<MethodOptions> method_;
+};
+
+// What a key of options written before methods owned their knobs (hashfusion <= cc8db77: one RegistrationOptions
+// with every method's keys, as in report.json's config.registration_options) means for options `now` (a method's,
+// or the driver's alone). For a former key `now` does not have: the key it was renamed to, or "" when `now` has no
+// such knob (drop it); the key itself when `now` has it; std::nullopt when it was never a registration option (an
+// error for the caller). Renames: "t_dof" (nu of both terms) is "t_dof_icp" where only the ICP term has a nu,
+// "max_dist_m" (also the photometric occlusion gate) is "occlusion_max_depth_m" where only the photometric term
+// has that gate; every other former key is dropped by options that do not have it.
+std::optional<std::string> migrate_registration_key(const RegistrationOptions& now, const std::string& key);
 
 struct RegistrationResult {
   SE3 T_ref_cur;  // maps current-camera points into the reference camera (delta_T, eq. 10-11)
@@ -64,83 +201,6 @@ struct RegistrationResult {
   }
 };
 
-// Settings of the Gauss-Newton driver (registration/gauss_newton.h) with the defaults of each method.
-struct RegistrationOptions {
-  // Iterations per pyramid level, [0] finest: KinectFusion's 4/5/10 coarse to fine. Its size is the number of
-  // levels used (at most the pyramids' levels).
-  std::vector<int> iterations = {10, 5, 4};
-  // Convergence: stop a level when the step is below both (radians, metres). 1e-5 moves a point at 2 m by
-  // ~0.005 px at 640x480 and is 50x below the accuracy the tests ask for; a smaller threshold only spends
-  // finest-level iterations on rounding-level steps (1e-6 took 2-4 more of them per frame).
-  double min_step_rotation_rad = 1e-5;
-  double min_step_translation_m = 1e-5;
-  // Correspondence rejection (ICP): distance (all levels) and normal angle.
-  float max_dist_m = 0.1f;          // KinectFusion: 10 cm
-  float max_normal_angle_deg = 30.0f;
-  // Robust weights (IRLS). Geometric residuals in metres, photometric in intensity units.
-  RobustKernel robust_icp = RobustKernel::huber;
-  float huber_icp_m = 0.01f;
-  RobustKernel robust_rgb = RobustKernel::student_t;
-  float huber_rgb = 0.05f;     // Huber k for photometric residuals
-  float t_dof = 5.0f;          // DVO's nu
-  // Student-t sigma of photometric residuals: re-estimated each iteration (DVO); this is the starting value and
-  // the floor.
-  float t_sigma_rgb_init = 0.05f;
-  float t_sigma_rgb_min = 0.002f;
-  float t_sigma_icp_m = 0.01f;  // fixed sigma when robust_icp = student_t
-  // Weight lambda of photometric rows in `combined` (eq. 47-48), chosen by a sweep over 0..1 on the real TUM
-  // pairs (bench_registration --lambda-sweep; table in bench/results/registration.md): on fr1_rpy (149 pairs)
-  // 0.1-0.2 give the lowest mean errors (4.0 mm / 0.35 deg against 5.3 mm / 0.50 deg for lambda 0), fr1_desk
-  // (8 pairs) prefers 0.01-0.02 and grows slowly beyond (3.0 mm at 0.1), and 0.2 or more lowers the smallest
-  // balanced eigenvalue ratio on real frames to ~2e-3, under the degeneracy threshold. Photometric rows are
-  // intensity units ([0, 1]) against metres for ICP, and with finest_level_photometric_step = 2 there are a
-  // quarter as many of them at the finest level; lambda was measured with that setting.
-  float rgb_weight = 0.1f;
-  // Photometric: skip pixels whose reference |grad I| is below this (intensity per pixel; 1/255 = one grey level):
-  // they carry no information, and a frame with almost none left is reported as poor (low inlier ratio).
-  float min_gradient = 1.0f / 255.0f;
-  bool photometric_occlusion_check = true;
-  // Photometric rows at the finest level only for every finest_level_photometric_step-th current pixel in x
-  // and y (1 = all); geometric rows always use every pixel. The reference images are still sampled at full
-  // resolution, so the rows keep level-0 precision while costing a quarter (step 2). Photometric rows are the
-  // expensive ones (three bilinear samples each) and neighbouring intensity residuals are strongly correlated,
-  // so step 2 loses little; subsampling the ICP rows too (tried) cost combined 0.012 deg on the noise-free room.
-  int finest_level_photometric_step = 2;
-  // Degeneracy (Zhang et al. 2016): eigen-directions with lambda_i < threshold * lambda_max are not updated.
-  // In a direction the geometry leaves free, the balanced ratio lambda_i / lambda_max is set by the normals'
-  // noise (~ sigma_n^2), not by the scene: ~2e-4..1.5e-3 for the wall preset at 320x240 with the 7x7 bilateral
-  // filter. Well-constrained scenes sit at 1e-2..1.5e-2 (room, holes, textureless; photometric on the room
-  // ~1e-2). A corridor lies between (~5e-3 along its axis): weakly, not un-, constrained, and a threshold that
-  // flagged it would sit within 1.4x of both the corridor and the room, flipping with the noise level. So the
-  // threshold is 3e-3, 2x above the wall's noise floor and 1.7x below the corridor, which is reported good with
-  // its weak axis in weakest_direction (tests/registration/test_hard_cases.cpp).
-  double degeneracy_threshold = 3e-3;
-  // Outcome checks.
-  long min_inliers = 64;              // fewer at the finest level: no_data (0 rows) or failed
-  double poor_inlier_ratio = 0.3;     // below: poor
-  double max_translation_m = 0.5;     // |t| of T_guess^-1 T_result beyond: failed (never a wild pose)
-  double max_rotation_deg = 45.0;
-  // A result that moved more than verify_motion_m or verify_motion_deg from the initial guess is re-checked by
-  // aligning the reference onto the current frame; unless the two agree (the loop T_fwd T_rev is within
-  // verify_agreement_m and verify_agreement_deg of the identity) it is reported failed. A large motion is where
-  // projective association settles in false minima; 5 cm / 10 deg per frame is above every consecutive pair of
-  // TUM fr1 in ../shared/data (hand-held, 30 Hz: at most 1.8 cm (desk) and 6.0 deg (rpy) by their ground truth),
-  // so normal tracking never pays for the second alignment.
-  double verify_motion_m = 0.05;
-  double verify_motion_deg = 10.0;
-  double verify_agreement_m = 0.01;
-  double verify_agreement_deg = 0.5;
-  // The last finest-level step must be below these, else the estimate was still sliding: failed. On real frames
-  // the IRLS weights change a little every iteration, so the last step of a converged solve sits near 1e-4 (fr1/rpy
-  // at 320x240: 43 of 150 frames ended with steps of 1.4e-4 m / 2e-4 rad, which 2e-4 thresholds rejected as
-  // failures); sliding means steps of millimetres and tenths of a degree.
-  double max_final_step_translation_m = 2e-3;
-  double max_final_step_rotation_rad = 2e-3;
-
-  // Throws hf::Error naming the first bad field.
-  void validate() const;
-};
-
 class Registration {
  public:
   virtual ~Registration() = default;
@@ -152,10 +212,19 @@ class Registration {
   virtual const RegistrationOptions& options() const = 0;
 };
 
-using RegistrationFactory =
-    std::function<std::unique_ptr<Registration>(const RegistrationOptions&, std::unique_ptr<ReductionBackend>)>;
+// A registry entry: the name users type, the method's default options, its factory (which validates the options
+// and throws hf::Error for options of another method).
+struct RegistrationMethod {
+  std::string name;
+  RegistrationOptions (*defaults)() = nullptr;
+  std::unique_ptr<Registration> (*make)(const RegistrationOptions&, std::unique_ptr<ReductionBackend>) = nullptr;
+};
 
-// Default options of a registered method (each method tunes its robust kernels); hf::Error for unknown names.
+// Adds a method at run time (the built-in ones are in registration/methods.def); hf::Error when the name is taken
+// or the entry is incomplete. Thread-safe, like the look-ups below.
+void register_registration(const RegistrationMethod& method);
+
+// Default options of a registered method; hf::Error for unknown names.
 RegistrationOptions default_registration_options(const std::string& name);
 
 // The registry. make_registration throws hf::Error "unknown registration method 'x' (known: ...)" for unknown

@@ -5,20 +5,26 @@
 // The pair is rejected when a vertex or normal is invalid, the point is behind the camera or outside the image,
 // the points are more than max_dist_m apart, or the rotated current normal and the reference normal disagree
 // by more than acos(min_normal_cos). Row (eq. 24-25): J = -[ (v x n)^T n^T ], r = <v_ref - v, n_ref>.
+// Reads HF_REG_IN_CUR_VERTICES, HF_REG_IN_CUR_NORMALS, HF_REG_IN_REF_VERTICES, HF_REG_IN_REF_NORMALS.
 #ifndef HF_REGISTRATION_KERNELS_ICP_KERNEL_H
 #define HF_REGISTRATION_KERNELS_ICP_KERNEL_H
 
 #include "registration/kernels/reg_common.h"
 
+typedef struct {
+  float max_dist_m;      // reject a pair when |T v_cur - v_ref| exceeds this
+  float min_normal_cos;  // reject a pair when (R n_cur) . n_ref is below this (cos of the max angle)
+  float weight;          // term weight of the rows (1 alone)
+  hf_reg_robust robust;  // scale in metres
+} hf_icp_params;
+
 // Returns 1 and fills *row when pixel (x, y) of the current frame has a correspondence, else 0.
-// All maps are K.width x K.height, row-major; the current and the reference camera share K.
-HF_INLINE int hf_icp_pixel(int x, int y, const HF_GLOBAL hf_float4* cur_vertices,
-                           const HF_GLOBAL hf_float4* cur_normals, const HF_GLOBAL hf_float4* ref_vertices,
-                           const HF_GLOBAL hf_float4* ref_normals, hf_intrinsics K, hf_transform12 T,
-                           hf_reg_params p, hf_reg_row* row) {
+// The current and the reference camera share K.
+HF_INLINE int hf_icp_pixel(int x, int y, const hf_reg_maps* maps, hf_intrinsics K, hf_transform12 T,
+                           hf_icp_params p, hf_reg_row* row) {
   const int idx = y * K.width + x;
-  const hf_float4 vc = cur_vertices[idx];
-  const hf_float4 nc = cur_normals[idx];
+  const hf_float4 vc = hf_reg_map4(maps, HF_REG_IN_CUR_VERTICES)[idx];
+  const hf_float4 nc = hf_reg_map4(maps, HF_REG_IN_CUR_NORMALS)[idx];
   if (!hf_is_valid4(vc) || !hf_is_valid4(nc)) return 0;
   const hf_float4 v = hf_reg_transform_point(T, vc);
   if (!(v.z > 0.0f)) return 0;
@@ -28,16 +34,18 @@ HF_INLINE int hf_icp_pixel(int x, int y, const HF_GLOBAL hf_float4* cur_vertices
   if (!(px > -0.5f && py > -0.5f && px < (float)K.width - 0.5f && py < (float)K.height - 0.5f)) return 0;
   const int u = (int)(px + 0.5f), w = (int)(py + 0.5f);
   const int ridx = w * K.width + u;
-  const hf_float4 vr = ref_vertices[ridx];
-  const hf_float4 nr = ref_normals[ridx];
+  const hf_float4 vr = hf_reg_map4(maps, HF_REG_IN_REF_VERTICES)[ridx];
+  const hf_float4 nr = hf_reg_map4(maps, HF_REG_IN_REF_NORMALS)[ridx];
   if (!hf_is_valid4(vr) || !hf_is_valid4(nr)) return 0;
   const hf_float4 d = hf_sub3(vr, v);
   if (!(hf_dot3(d, d) <= p.max_dist_m * p.max_dist_m)) return 0;
   if (!(hf_dot3(hf_reg_rotate(T, nc), nr) >= p.min_normal_cos)) return 0;
   const float r = hf_dot3(d, nr);
-  const float weight = p.icp_weight * hf_reg_robust_weight(p.robust_icp, r, p.scale_icp, p.t_dof);
+  const float weight = p.weight * hf_reg_term_weight(p.robust, r);
   hf_reg_set_row(v, hf_scale3(nr, -1.0f), r, weight, row);
   return 1;
 }
+
+HF_REG_OPENCL_KERNEL(icp, hf_icp_pixel, hf_icp_params)
 
 #endif

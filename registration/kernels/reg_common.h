@@ -1,7 +1,9 @@
 // Registration kernels: the types and helpers every per-pixel residual shares (report section 3.1-3.3).
 //
-// Written in the common subset of C++ and OpenCL C (core/kernels/cl_compat.h). Included by the C++ reduction
-// (registration/cpu_backend.cpp) and by the OpenCL kernels (registration/opencl/), so both compute the same rows.
+// Written in the common subset of C++ and OpenCL C (core/kernels/cl_compat.h). Included by each method's kernel
+// header (registration/kernels/<method>_kernel.h), which the C++ backend and the OpenCL program both compile, so
+// both compute the same rows. Nothing here names a method: a method's pixel function reads the input maps it
+// declared (hf_reg_maps, by HF_REG_IN_* slot) and its own parameter struct, and writes 0..HF_REG_MAX_ROWS rows.
 //
 // Frames and parameters (report eq. 10-13, 17, 26):
 // - "ref" is the reference frame t (model maps from a raycast, or the previous frame), "cur" the current frame t+1.
@@ -28,15 +30,36 @@
 #define HF_REG_SUM_G 21
 #define HF_REG_SUM_COST 27
 #define HF_REG_SUM_COUNT 28
-// At most this many rows per pixel (combined: one geometric and one photometric row).
-#define HF_REG_MAX_ROWS 2
+// At most this many rows per pixel, for every method (combined: one geometric and one photometric row; a
+// whitened 3-vector residual: three); the driver refuses a method that declares more.
+#define HF_REG_MAX_ROWS 4
 
-// Which residual a problem evaluates (the `method` field of hf_reg_params).
-#define HF_REG_ICP 0
-#define HF_REG_PHOTOMETRIC 1
-#define HF_REG_COMBINED 2
+// Input map slots (hf_reg_maps::map). A method declares the slots it reads (DenseKernel::inputs); the driver fills
+// the pyramid's maps, a method fills its own slots (HF_REG_IN_METHOD0..) with maps it derives itself (e.g. per-pixel
+// covariances), and the OpenCL backend binds one buffer per slot. hf_float4 maps are read with hf_reg_map4().
+#define HF_REG_IN_CUR_VERTICES 0   // hf_float4, camera frame, metres, w = 1 valid
+#define HF_REG_IN_CUR_NORMALS 1    // hf_float4, unit, w = 1 valid
+#define HF_REG_IN_CUR_INTENSITY 2  // float, [0, 1]
+#define HF_REG_IN_REF_VERTICES 3
+#define HF_REG_IN_REF_NORMALS 4
+#define HF_REG_IN_REF_INTENSITY 5
+#define HF_REG_IN_REF_GRAD_X 6     // float, intensity units per pixel
+#define HF_REG_IN_REF_GRAD_Y 7
+#define HF_REG_IN_METHOD0 8        // slots 8..11: maps a method prepares itself
+#define HF_REG_MAX_INPUTS 12
+#define HF_REG_IN_BIT(slot) (1u << (slot))
 
-// Robust kernels for IRLS (the `robust_*` fields of hf_reg_params).
+// Every input map of one level, by slot; all are K.width x K.height, row-major. Slots a method does not read may
+// hold anything (the OpenCL side binds a dummy buffer).
+typedef struct {
+  const HF_GLOBAL float* map[HF_REG_MAX_INPUTS];
+} hf_reg_maps;
+
+HF_INLINE const HF_GLOBAL hf_float4* hf_reg_map4(const hf_reg_maps* maps, int slot) {
+  return (const HF_GLOBAL hf_float4*)maps->map[slot];
+}
+
+// Robust kernels for IRLS (hf_reg_robust::type).
 #define HF_ROBUST_NONE 0
 #define HF_ROBUST_HUBER 1      // w = 1 for |r| <= k, k / |r| beyond (k = scale)
 #define HF_ROBUST_STUDENT_T 2  // w = (nu + 1) / (nu + (r / sigma)^2), sigma = scale, nu = t_dof (DVO, Kerl 2013)
@@ -60,25 +83,14 @@ typedef struct {
   float w;
 } hf_reg_row;
 
-// Parameters of one residual evaluation. Plain 4-byte fields only, so the struct has the same layout on the host
-// and in OpenCL C and can be passed by value as a kernel argument.
+// The robust weight of one term: type HF_ROBUST_*, its scale (k or sigma, in the residual's units), nu of the
+// Student-t kernel. Plain 4-byte fields, as every parameter struct of a method (each is passed by value as an
+// OpenCL kernel argument, so host and device layouts must agree).
 typedef struct {
-  int method;                  // HF_REG_ICP / HF_REG_PHOTOMETRIC / HF_REG_COMBINED
-  float max_dist_m;            // reject a pair when |T v_cur - v_ref| exceeds this (ICP; photometric occlusion)
-  float min_normal_cos;        // reject a pair when (R n_cur) . n_ref is below this (cos of the max angle)
-  float icp_weight;            // term weight of geometric rows (1)
-  float rgb_weight;            // term weight lambda of photometric rows (eq. 47-48; 1 for photometric alone)
-  int robust_icp;              // HF_ROBUST_* for geometric rows
-  float scale_icp;             // its k (Huber) or sigma (Student-t), metres
-  int robust_rgb;              // HF_ROBUST_* for photometric rows
-  float scale_rgb;             // its k or sigma, intensity units ([0, 1])
-  float t_dof;                 // nu of the Student-t kernel (DVO: 5)
-  float min_gradient_sq;       // photometric: skip pixels whose reference gradient |grad I|^2 is below this
-  int occlusion_check;         // photometric: non-zero rejects pixels whose warped depth differs from the
-                               // reference vertex at that pixel by more than max_dist_m
-  int photometric_step;        // photometric rows only for current pixels with x and y multiples of this
-                               // (<= 1: every pixel); geometric rows are evaluated at every pixel
-} hf_reg_params;
+  int type;  // HF_ROBUST_*
+  float scale;
+  float t_dof;
+} hf_reg_robust;
 
 HF_INLINE hf_float4 hf_reg_transform_point(hf_transform12 T, hf_float4 p) {
   return hf_make_float4(T.m[0] * p.x + T.m[1] * p.y + T.m[2] * p.z + T.m[9],
@@ -119,6 +131,10 @@ HF_INLINE void hf_reg_set_row(hf_float4 v, hf_float4 a, float r, float w, hf_reg
   row->w = w;
 }
 
+HF_INLINE float hf_reg_term_weight(hf_reg_robust robust, float r) {
+  return hf_reg_robust_weight(robust.type, r, robust.scale, robust.t_dof);
+}
+
 // Adds one row to the 29 sums (order at the top of this file).
 HF_INLINE void hf_reg_accumulate(const hf_reg_row* row, hf_reg_sum_t* sums) {
   const hf_reg_sum_t w = (hf_reg_sum_t)row->w;
@@ -135,5 +151,12 @@ HF_INLINE void hf_reg_accumulate(const hf_reg_row* row, hf_reg_sum_t* sums) {
   sums[HF_REG_SUM_COST] += w * r * r;
   sums[HF_REG_SUM_COUNT] += (hf_reg_sum_t)1;
 }
+
+// A method's kernel header ends with HF_REG_OPENCL_KERNEL(name, pixel function, parameter type): in the OpenCL
+// program (registration/opencl/registration.cl) it defines the reduction kernel hf_reg_reduce_<name>; in C++ it
+// is empty (the C++ side's entry is the method's DenseKernel, registration/dense_method.h).
+#ifndef HF_REG_OPENCL_KERNEL
+#define HF_REG_OPENCL_KERNEL(name, pixel, params_type)
+#endif
 
 #endif

@@ -15,13 +15,13 @@ std::unique_ptr<ReductionBackend> make_opencl_backend() {
 namespace opencl {
 namespace {
 
-// Argument indices of hf_reg_reduce (registration.cl).
-constexpr int kArgFirstMap = 0;  // 8 maps: cur v, n, I; ref v, n, I, gx, gy
-constexpr int kArgIntrinsics = 8;
-constexpr int kArgTransform = 9;
-constexpr int kArgParams = 10;
-constexpr int kArgGroupSums = 11;
-constexpr int kArgScratch = 12;
+// Argument indices of hf_reg_reduce_<method> (HF_REG_OPENCL_KERNEL in registration.cl).
+constexpr int kArgFirstMap = 0;  // HF_REG_MAX_INPUTS maps, by slot
+constexpr int kArgIntrinsics = HF_REG_MAX_INPUTS;
+constexpr int kArgTransform = kArgIntrinsics + 1;
+constexpr int kArgParams = kArgTransform + 1;
+constexpr int kArgGroupSums = kArgParams + 1;
+constexpr int kArgScratch = kArgGroupSums + 1;
 
 // hf_reg_reduce_rows: rows, n, group_sums, scratch.
 constexpr int kRowsArgScratch = 3;
@@ -42,21 +42,55 @@ OpenClReductionBackend::OpenClReductionBackend(std::shared_ptr<Context> context,
     // Correctly rounded division and square root, as in C++, for the same accept/reject decisions per pixel.
     std::string build_options = "-cl-fp32-correctly-rounded-divide-sqrt";
     if (use_double_) build_options += " -DHF_REG_REDUCE_DOUBLE=1";
-    cl::Program program =
-        context_->program(use_double_ ? "registration-double" : "registration-float", registration_program_source(),
-                          build_options);
-    reduce_kernel_ = cl::Kernel(program, "hf_reg_reduce");
-    rows_kernel_ = cl::Kernel(program, "hf_reg_reduce_rows");
+    build_options_ = build_options;
+    program_ = context_->program(use_double_ ? "registration-double" : "registration-float",
+                                 registration_program_source(), build_options_);
+    rows_kernel_ = cl::Kernel(program_, "hf_reg_reduce_rows");
     queue_ = cl::CommandQueue(context_->context(), context_->device());
-    const std::size_t bytes_per_item = HF_REG_SUMS * (use_double_ ? sizeof(double) : sizeof(float));
-    work_group_size_ = std::min(context_->work_group_size(reduce_kernel_, bytes_per_item, options_.max_work_group_size),
-                                context_->work_group_size(rows_kernel_, bytes_per_item, options_.max_work_group_size));
+    // One work-group size for every kernel of the program (the built-in methods' and the rows kernel).
+    std::vector<cl::Kernel> kernels;
+    program_.createKernels(&kernels);
+    work_group_size_ = options_.max_work_group_size;
+    for (const cl::Kernel& k : kernels) {
+      work_group_size_ = std::min(work_group_size_, context_->work_group_size(k, bytes_per_item(), work_group_size_));
+    }
     dummy_ = cl::Buffer(context_->context(), CL_MEM_READ_ONLY, sizeof(hf_float4));
   } catch (const Error&) {
     throw;
   } catch (...) {
     rethrow_as_hf_error("OpenCL backend on " + context_->info().describe());
   }
+}
+
+std::size_t OpenClReductionBackend::bytes_per_item() const {
+  return HF_REG_SUMS * (use_double_ ? sizeof(double) : sizeof(float));
+}
+
+cl::Kernel& OpenClReductionBackend::method_kernel(const DenseKernel& method) {
+  auto it = kernels_.find(method.name);
+  if (it != kernels_.end()) return it->second;
+  const std::string entry = std::string("hf_reg_reduce_") + method.name;
+  cl::Kernel kernel;
+  if (method.opencl_source != nullptr && method.opencl_source[0] != '\0') {
+    // A method registered at run time: the shared part of the program plus its own kernel header.
+    const std::string source = std::string(registration_program_source()) + "\n" + method.opencl_source;
+    cl::Program program = context_->program(std::string(use_double_ ? "registration-double-" : "registration-float-") +
+                                                method.name,
+                                            source, build_options_);
+    kernel = cl::Kernel(program, entry.c_str());
+  } else {
+    try {
+      kernel = cl::Kernel(program_, entry.c_str());
+    } catch (const cl::Error&) {
+      throw Error("OpenCL backend: method '" + std::string(method.name) + "' has no OpenCL kernel " + entry +
+                  " (its kernel header is not in registration/methods.def and it brings no opencl_source)");
+    }
+  }
+  if (context_->work_group_size(kernel, bytes_per_item(), work_group_size_) < work_group_size_) {
+    throw Error("OpenCL backend: kernel " + entry + " does not fit the work-group size " +
+                std::to_string(work_group_size_));
+  }
+  return kernels_.emplace(method.name, kernel).first->second;
 }
 
 cl::Buffer& OpenClReductionBackend::slot_buffer(int slot, const void* data, std::size_t bytes) {
@@ -73,29 +107,29 @@ cl::Buffer& OpenClReductionBackend::slot_buffer(int slot, const void* data, std:
   return s.buffer;
 }
 
-void OpenClReductionBackend::upload_inputs(const ResidualProblem& p) {
+void OpenClReductionBackend::upload_inputs(const ResidualProblem& p, cl::Kernel& kernel) {
   const std::size_t n = std::size_t(p.width()) * std::size_t(p.height());
-  const void* maps[8] = {p.cur_vertices, p.cur_normals, p.cur_intensity, p.ref_vertices,
-                         p.ref_normals,  p.ref_intensity, p.ref_grad_x, p.ref_grad_y};
-  const std::size_t elem[8] = {sizeof(hf_float4), sizeof(hf_float4), sizeof(float), sizeof(hf_float4),
-                               sizeof(hf_float4), sizeof(float),     sizeof(float), sizeof(float)};
   bool same = have_inputs_ && inputs_version_ == p.inputs_version && width_ == p.width() && height_ == p.height();
-  for (int i = 0; i < 8 && same; ++i) same = slots_[i].source == maps[i];
-  if (same) return;
-  for (int i = 0; i < 8; ++i) {
-    if (maps[i] == nullptr) {
-      slots_[i].source = nullptr;
-      slots_[i].bytes = 0;
-      reduce_kernel_.setArg(kArgFirstMap + i, dummy_);
-    } else {
-      reduce_kernel_.setArg(kArgFirstMap + i, slot_buffer(i, maps[i], n * elem[i]));
+  for (int i = 0; i < HF_REG_MAX_INPUTS && same; ++i) same = slots_[i].source == p.maps[i].data;
+  if (!same) {
+    for (int i = 0; i < HF_REG_MAX_INPUTS; ++i) {
+      if (p.maps[i].data == nullptr) {
+        slots_[i].source = nullptr;
+        slots_[i].bytes = 0;
+      } else {
+        slot_buffer(i, p.maps[i].data, n * p.maps[i].bytes_per_pixel);
+      }
     }
+    have_inputs_ = true;
+    inputs_version_ = p.inputs_version;
+    width_ = p.width();
+    height_ = p.height();
+    ++uploads_;
   }
-  have_inputs_ = true;
-  inputs_version_ = p.inputs_version;
-  width_ = p.width();
-  height_ = p.height();
-  ++uploads_;
+  // Arguments belong to the kernel object (one per method): bind the slots every time, which is cheap.
+  for (int i = 0; i < HF_REG_MAX_INPUTS; ++i) {
+    kernel.setArg(kArgFirstMap + i, slots_[i].source == nullptr ? dummy_ : slots_[i].buffer);
+  }
 }
 
 std::vector<double> OpenClReductionBackend::run_groups(cl::Kernel& kernel, std::size_t items, int first_local_arg) {
@@ -135,12 +169,13 @@ std::vector<double> OpenClReductionBackend::run_groups(cl::Kernel& kernel, std::
 NormalEquations OpenClReductionBackend::reduce(const ResidualProblem& problem) {
   validate_problem(problem);
   try {
-    upload_inputs(problem);
-    reduce_kernel_.setArg(kArgIntrinsics, sizeof(hf_intrinsics), &problem.camera);
-    reduce_kernel_.setArg(kArgTransform, sizeof(hf_transform12), &problem.T_ref_cur);
-    reduce_kernel_.setArg(kArgParams, sizeof(hf_reg_params), &problem.params);
+    cl::Kernel& kernel = method_kernel(*problem.kernel);
+    upload_inputs(problem, kernel);
+    kernel.setArg(kArgIntrinsics, sizeof(hf_intrinsics), &problem.camera);
+    kernel.setArg(kArgTransform, sizeof(hf_transform12), &problem.T_ref_cur);
+    kernel.setArg(kArgParams, problem.kernel->params_bytes, problem.params);
     const std::size_t pixels = std::size_t(problem.width()) * std::size_t(problem.height());
-    const std::vector<double> sums = run_groups(reduce_kernel_, pixels, kArgScratch);
+    const std::vector<double> sums = run_groups(kernel, pixels, kArgScratch);
     return NormalEquations::from_sums(sums.data());
   } catch (const Error&) {
     throw;

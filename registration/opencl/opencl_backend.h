@@ -1,6 +1,8 @@
-// The OpenCL reduction backend ("opencl"): the per-pixel rows of registration/kernels/residuals.h evaluated by an
-// OpenCL kernel (registration/opencl/registration.cl, which includes the same header as the C++ backend) and
-// reduced in two stages: a work-group tree in local memory, then a host sum of the group rows in double.
+// The OpenCL reduction backend ("opencl"): the per-pixel rows of the problem's method evaluated by its OpenCL
+// kernel hf_reg_reduce_<name> (registration/opencl/registration.cl plus the method's kernel header, the same header
+// the C++ backend compiles) and reduced in two stages: a work-group tree in local memory, then a host sum of the
+// group rows in double. A method registered at run time brings its kernel's source (DenseKernel::opencl_source),
+// built into a program of its own on first use.
 //
 //   auto backend = hf::make_opencl_backend();            // throws hf::Error when there is no OpenCL platform
 //   hf::NormalEquations ne = backend->reduce(problem);   // same contract as every ReductionBackend
@@ -10,17 +12,20 @@
 // Precision: on devices with cl_khr_fp64 the device accumulates in double and forms each row's products exactly as
 // the C++ backend does, so the two agree to the order of the double additions (tests: 1e-6 relative on the
 // normal equations, far tighter in practice); without fp64 the device sums in float (pairwise in the group tree).
-// Buffers: allocated once at the largest size seen and reused; the input maps are uploaded only when
+// Buffers: one per input slot (HF_REG_MAX_INPUTS), allocated once at the largest size seen and reused; the input
+// maps are uploaded only when
 // ResidualProblem::inputs_version, a map pointer or the size changes (the driver keeps them across the
 // iterations of one level), so an iteration uploads only its 12-float pose and parameters.
 // Failures: hf::Error for a malformed problem (validate_problem) and for any OpenCL error (naming the call and
-// the error code). Thread-safety: one thread at a time per backend object (own command queue); several backends
+// the error code; a method without an OpenCL kernel is such an error). Thread-safety: one thread at a time per backend object (own command queue); several backends
 // may share the context from different threads.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "registration/opencl/opencl_context.h"
@@ -65,18 +70,22 @@ class OpenClReductionBackend final : public ReductionBackend {
     std::size_t bytes = 0;
   };
 
-  void upload_inputs(const ResidualProblem& problem);
+  void upload_inputs(const ResidualProblem& problem, cl::Kernel& kernel);
+  cl::Kernel& method_kernel(const DenseKernel& method);
+  std::size_t bytes_per_item() const;
   cl::Buffer& slot_buffer(int slot, const void* data, std::size_t bytes);
   std::vector<double> run_groups(cl::Kernel& kernel, std::size_t items, int first_local_arg);
 
   std::shared_ptr<Context> context_;
   OpenClBackendOptions options_;
   cl::CommandQueue queue_;
-  cl::Kernel reduce_kernel_;
+  std::string build_options_;
+  cl::Program program_;
+  std::map<std::string, cl::Kernel> kernels_;  // by method name
   cl::Kernel rows_kernel_;
   bool use_double_ = false;
   std::size_t work_group_size_ = 1;
-  Slot slots_[8];
+  Slot slots_[HF_REG_MAX_INPUTS];
   cl::Buffer dummy_;
   cl::Buffer group_sums_;
   std::size_t group_sums_capacity_ = 0;

@@ -1,10 +1,13 @@
 // OpenCL reduction of the registration normal equations (registration/reduction.h, order of the 29 sums in
-// registration/kernels/reg_common.h). Embedded into the binary by embed_opencl.cmake, which inlines the shared
-// headers included below, and built once per context by registration/opencl/opencl_backend.cpp.
+// registration/kernels/reg_common.h): the part every method shares. Embedded into the binary by
+// embed_opencl.cmake, which appends each registered method's kernel header (registration/methods.def) and inlines
+// the shared headers, and built once per context by registration/opencl/opencl_backend.cpp. Each kernel header
+// ends with HF_REG_OPENCL_KERNEL(name, pixel, params), which defines its reduction kernel hf_reg_reduce_<name>
+// here; the backend picks the kernel by the method's name, so this file never names a method.
 //
-// Two stages (OpenCV KinFu's scheme): each work-item evaluates pixels with the shared per-pixel function
-// hf_reg_pixel() and sums their rows; the work-group then adds its items' 29 sums with a tree in local memory and
-// writes one row of 29 per group; the host adds the group rows in double.
+// Two stages (OpenCV KinFu's scheme): each work-item evaluates pixels with the method's shared per-pixel function
+// and sums their rows; the work-group then adds its items' 29 sums with a tree in local memory and writes one row
+// of 29 per group; the host adds the group rows in double.
 //
 // Build options set by the host:
 //   -DHF_REG_REDUCE_DOUBLE=1  accumulate in double (devices with cl_khr_fp64). Each row's products are then
@@ -18,7 +21,11 @@
 // SSE); forbid contraction here too, so both paths make the same accept/reject decisions on every pixel.
 #pragma OPENCL FP_CONTRACT OFF
 
-#include "registration/kernels/residuals.h"
+#include "registration/kernels/reg_common.h"
+
+#if HF_REG_MAX_INPUTS != 12
+#error "HF_REG_OPENCL_KERNEL binds 12 input slots: update it with HF_REG_MAX_INPUTS"
+#endif
 
 #if HF_REG_REDUCE_DOUBLE
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -65,28 +72,43 @@ HF_INLINE void hf_cl_group_reduce(const hf_cl_acc* sums, __local hf_cl_acc* scra
   }
 }
 
-// The normal equations of one level: work-item i evaluates pixels i, i + G, i + 2G, ... (G = global size) of
-// the K.width x K.height maps. Map pointers the method does not read may be a dummy buffer (residuals.h).
-__kernel void hf_reg_reduce(__global const hf_float4* cur_vertices, __global const hf_float4* cur_normals,
-                            __global const float* cur_intensity, __global const hf_float4* ref_vertices,
-                            __global const hf_float4* ref_normals, __global const float* ref_intensity,
-                            __global const float* ref_grad_x, __global const float* ref_grad_y, hf_intrinsics K,
-                            hf_transform12 T, hf_reg_params p, __global hf_cl_acc* group_sums,
-                            __local hf_cl_acc* scratch) {
-  hf_cl_acc sums[HF_REG_SUMS];
-  for (int k = 0; k < HF_REG_SUMS; ++k) sums[k] = (hf_cl_acc)0;
-  const int n = K.width * K.height;
-  const int stride = (int)get_global_size(0);
-  for (int idx = (int)get_global_id(0); idx < n; idx += stride) {
-    const int y = idx / K.width;
-    const int x = idx - y * K.width;
-    hf_reg_row rows[HF_REG_MAX_ROWS];
-    const int m = hf_reg_pixel(x, y, cur_vertices, cur_normals, cur_intensity, ref_vertices, ref_normals,
-                               ref_intensity, ref_grad_x, ref_grad_y, K, T, p, rows);
-    for (int k = 0; k < m; ++k) hf_cl_accumulate(&rows[k], sums);
+// The normal equations of one level for the method whose pixel function is PIXEL (parameter struct PARAMS): the
+// kernel hf_reg_reduce_NAME. Work-item i evaluates pixels i, i + G, i + 2G, ... (G = global size) of the
+// K.width x K.height maps, one buffer per input slot (HF_REG_MAX_INPUTS = 12; slots the method does not read are
+// a dummy buffer).
+#undef HF_REG_OPENCL_KERNEL
+#define HF_REG_OPENCL_KERNEL(NAME, PIXEL, PARAMS)                                                                  \
+  __kernel void hf_reg_reduce_##NAME(                                                                              \
+      __global const float* m0, __global const float* m1, __global const float* m2, __global const float* m3,      \
+      __global const float* m4, __global const float* m5, __global const float* m6, __global const float* m7,      \
+      __global const float* m8, __global const float* m9, __global const float* m10, __global const float* m11,    \
+      hf_intrinsics K, hf_transform12 T, PARAMS p, __global hf_cl_acc* group_sums, __local hf_cl_acc* scratch) {   \
+    hf_reg_maps maps;                                                                                              \
+    maps.map[0] = m0;                                                                                              \
+    maps.map[1] = m1;                                                                                              \
+    maps.map[2] = m2;                                                                                              \
+    maps.map[3] = m3;                                                                                              \
+    maps.map[4] = m4;                                                                                              \
+    maps.map[5] = m5;                                                                                              \
+    maps.map[6] = m6;                                                                                              \
+    maps.map[7] = m7;                                                                                              \
+    maps.map[8] = m8;                                                                                              \
+    maps.map[9] = m9;                                                                                              \
+    maps.map[10] = m10;                                                                                            \
+    maps.map[11] = m11;                                                                                            \
+    hf_cl_acc sums[HF_REG_SUMS];                                                                                   \
+    for (int k = 0; k < HF_REG_SUMS; ++k) sums[k] = (hf_cl_acc)0;                                                  \
+    const int n = K.width * K.height;                                                                              \
+    const int stride = (int)get_global_size(0);                                                                    \
+    for (int idx = (int)get_global_id(0); idx < n; idx += stride) {                                                \
+      const int y = idx / K.width;                                                                                 \
+      const int x = idx - y * K.width;                                                                             \
+      hf_reg_row rows[HF_REG_MAX_ROWS];                                                                            \
+      const int m = PIXEL(x, y, &maps, K, T, p, rows);                                                             \
+      for (int k = 0; k < m; ++k) hf_cl_accumulate(&rows[k], sums);                                                \
+    }                                                                                                              \
+    hf_cl_group_reduce(sums, scratch, group_sums);                                                                 \
   }
-  hf_cl_group_reduce(sums, scratch, group_sums);
-}
 
 // The same two-stage reduction over given rows (n rows of 8 floats: J[6], r, w, the layout of hf_reg_row), so a
 // test can check the reduction alone against a double sum on the host.

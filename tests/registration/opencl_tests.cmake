@@ -15,15 +15,3 @@ if(TARGET hf_registration_opencl)
            COMMAND ${CMAKE_COMMAND} -E make_directory ${CMAKE_CURRENT_BINARY_DIR}/no_opencl_vendors)
   set_tests_properties(registration_opencl_no_platform_setup PROPERTIES FIXTURES_SETUP hf_no_opencl_vendors)
 endif()
-
-# The backend's kernels stay valid OpenCL C 1.2 in both accumulation modes, also where no driver is installed.
-find_program(HF_CLANG_FOR_OPENCL NAMES clang clang-14 clang-15 clang-16)
-if(HF_CLANG_FOR_OPENCL)
-  foreach(double 0 1)
-    add_test(NAME registration_opencl_kernels_c12_double${double}
-      COMMAND ${HF_CLANG_FOR_OPENCL} -x cl -cl-std=CL1.2 -Wall -Wextra -Werror -fsyntax-only
-              -DHF_REG_REDUCE_DOUBLE=${double} -I${PROJECT_SOURCE_DIR}
-              ${PROJECT_SOURCE_DIR}/registration/opencl/registration.cl)
-    set_tests_properties(registration_opencl_kernels_c12_double${double} PROPERTIES LABELS registration)
-  endforeach()
-endif()

@@ -9,6 +9,7 @@
 
 #include "datasets/synthetic_sequence.h"
 #include "registration/frame_pyramid.h"
+#include "registration/gauss_newton.h"
 #include "registration/registration.h"
 
 namespace hf::test {
@@ -51,6 +52,36 @@ inline void expect_finite(const RegistrationResult& r) {
   EXPECT_TRUE(std::isfinite(r.condition_number));
   EXPECT_TRUE(std::isfinite(r.final_cost));
   EXPECT_TRUE(std::isfinite(r.inlier_ratio));
+}
+
+// A registered method and, when it is a per-pixel method on the Gauss-Newton driver, that driver (its kernel and
+// level problems); dense == nullptr for a method that implements Registration directly.
+struct MethodUnderTest {
+  std::unique_ptr<Registration> registration;
+  GaussNewtonRegistration* dense = nullptr;
+};
+
+inline MethodUnderTest method_under_test(const std::string& name, const RegistrationOptions& options,
+                                         std::unique_ptr<ReductionBackend> backend) {
+  MethodUnderTest m;
+  m.registration = make_registration(name, options, std::move(backend));
+  m.dense = dynamic_cast<GaussNewtonRegistration*>(m.registration.get());
+  return m;
+}
+
+inline MethodUnderTest method_under_test(const std::string& name, const std::string& backend = "cpu") {
+  return method_under_test(name, default_registration_options(name), make_backend(backend));
+}
+
+// Sets every robust-kernel option of `options` (each term's) to `kernel`.
+inline void set_robust_kernels(RegistrationOptions& options, RobustKernel kernel) {
+  options.for_each_option([kernel](const char*, auto& field) {
+    if constexpr (std::is_same_v<std::remove_reference_t<decltype(field)>, RobustKernel>) field = kernel;
+  });
+}
+
+inline const char* robust_name(RobustKernel k) {
+  return k == RobustKernel::huber ? "huber" : k == RobustKernel::student_t ? "student_t" : "none";
 }
 
 }  // namespace hf::test

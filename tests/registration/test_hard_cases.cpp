@@ -45,7 +45,7 @@ TEST(HardCases, WallIcpIsDegenerateInThreeDirectionsCombinedRecoversThem) {
 // Walls, floor and ceiling along x: only noise and perspective constrain the translation along the corridor. It
 // is weakly constrained, not unconstrained: its balanced eigenvalue ratio (~5e-3 at 320x240 with sensor noise)
 // is 2-3x below well-constrained scenes and ~4x above the noise floor of the wall's free directions, so it is
-// not flagged degenerate (threshold 3e-3, reasoning at RegistrationOptions::degeneracy_threshold). The documented
+// not flagged degenerate (threshold 3e-3, GaussNewtonOptions::degeneracy_threshold). The documented
 // outcome: icp reports good with a small eigenvalue ratio (below 1e-2) and little information along the axis
 // (the camera looks along it: its z axis), and keeps the motion along it at the initial guess; combined recovers
 // most of it from the texture (error below a third of the 30 mm motion; 4 mm when every finest-level pixel
@@ -56,7 +56,7 @@ TEST(HardCases, CorridorIsWeaklyConstrainedAlongItsAxisCombinedRecoversIt) {
   EXPECT_EQ(icp.result.status, RegistrationStatus::good) << icp.result.message;
   EXPECT_EQ(icp.result.degenerate_dims, 0);
   const double ratio = icp.result.eigenvalues(0) / icp.result.eigenvalues(5);
-  EXPECT_GT(ratio, make_registration("icp")->options().degeneracy_threshold);
+  EXPECT_GT(ratio, make_registration("icp")->options().driver.degeneracy_threshold);
   EXPECT_LT(ratio, 1e-2);
   // The information along the corridor's axis (the camera looks along it: its z axis), relative to the largest
   // eigenvalue: translations are not rescaled in the balanced matrix, so u^T H u with u = (0, 0, 0, 0, 0, 1).
@@ -86,10 +86,11 @@ TEST(HardCases, TexturelessPhotometricIsFlaggedIcpIsFine) {
 // says failed and returns the initial guess. Never a wild pose. On this pair none of the three converges from
 // identity: photometric diverges and combined is still sliding at the finest level (both caught by the outcome
 // checks), and icp settles in a false minimum 0.41 m off (78% inliers, lower cost than a correct noisy pair),
-// which only the reverse-alignment check of large motions (RegistrationOptions::verify_motion_*) exposes.
+// which only the reverse-alignment check of large motions (GaussNewtonOptions::verify_motion_*) exposes. Every
+// registered method must do one or the other.
 TEST(HardCases, FastMotionConvergesOrFailsCleanly) {
   const test::FramePair pair = test::make_pair("fast", 3, 4, true);
-  for (const std::string method : {"icp", "photometric", "combined"}) {
+  for (const std::string& method : registration_names()) {
     const Outcome o = run(method, pair);
     if (o.result.status == RegistrationStatus::failed) {
       EXPECT_LT(test::translation_error_m(o.result.T_ref_cur, SE3()), 1e-12) << method;
@@ -109,10 +110,10 @@ TEST(HardCases, ReverseAlignmentCheckOfLargeMotions) {
   // With the 1e-3 degeneracy threshold of earlier versions icp settles in a false minimum 0.41 m off on this
   // pair (with 3e-3 it is still sliding and fails on its own): that one the check must catch.
   RegistrationOptions checked = default_registration_options("icp");
-  checked.degeneracy_threshold = 1e-3;
+  checked.driver.degeneracy_threshold = 1e-3;
   RegistrationOptions unchecked = checked;
-  unchecked.verify_motion_m = 1e3;
-  unchecked.verify_motion_deg = 1e3;
+  unchecked.driver.verify_motion_m = 1e3;
+  unchecked.driver.verify_motion_deg = 1e3;
   const RegistrationResult fooled =
       make_registration("icp", unchecked, make_backend("cpu"))->align(fast.current, fast.reference, SE3());
   EXPECT_TRUE(fooled.usable());

@@ -16,6 +16,7 @@
 #include "registration/frame_pyramid.h"
 #include "registration/gauss_newton.h"
 #include "registration/opencl/opencl_backend.h"
+#include "reg_test_util.h"
 
 namespace hf {
 namespace {
@@ -107,7 +108,11 @@ TEST(OpenClContext, ProgramsAreBuiltOncePerKey) {
 
 TEST(OpenClContext, EmbeddedSourceInlinesTheSharedHeaders) {
   const std::string_view src = opencl::registration_program_source();
-  EXPECT_NE(src.find("hf_reg_pixel"), std::string_view::npos);
+  // Every registered per-pixel method's kernel is in the program.
+  for (const std::string& name : registration_names()) {
+    if (test::method_under_test(name).dense == nullptr) continue;
+    EXPECT_NE(src.find("HF_REG_OPENCL_KERNEL(" + name + ","), std::string_view::npos) << name;
+  }
   EXPECT_NE(src.find("#line 1 \"registration/kernels/reg_common.h\""), std::string_view::npos);
   EXPECT_NE(src.find("#line 1 \"core/kernels/cl_compat.h\""), std::string_view::npos);
   EXPECT_EQ(src.find("\n#include \"registration/"), std::string_view::npos);  // all inlined
@@ -162,51 +167,31 @@ const FramePair& room_pair() {
   return pair;
 }
 
-ResidualProblem make_problem(const FramePair& pair, int level, int method, int robust, const SE3& T) {
-  const FramePyramidLevel& c = pair.cur.levels[size_t(level)];
-  const FramePyramidLevel& r = pair.ref.levels[size_t(level)];
-  ResidualProblem p;
-  p.camera = hf_intrinsics{float(c.camera.fx), float(c.camera.fy), float(c.camera.cx), float(c.camera.cy),
-                           c.camera.width, c.camera.height};
-  p.cur_vertices = c.vertices.data();
-  p.cur_normals = c.normals.data();
-  p.cur_intensity = c.intensity.data();
-  p.ref_vertices = r.vertices.data();
-  p.ref_normals = r.normals.data();
-  p.ref_intensity = r.intensity.data();
-  p.ref_grad_x = r.grad_x.data();
-  p.ref_grad_y = r.grad_y.data();
-  p.T_ref_cur = to_transform12(T);
-  p.params.method = method;
-  p.params.max_dist_m = 0.1f;
-  p.params.min_normal_cos = std::cos(30.0f * 3.14159265f / 180.0f);
-  p.params.icp_weight = 1.0f;
-  p.params.rgb_weight = method == HF_REG_COMBINED ? 0.1f : 1.0f;
-  p.params.robust_icp = robust;
-  p.params.scale_icp = 0.01f;
-  p.params.robust_rgb = robust;
-  p.params.scale_rgb = 0.05f;
-  p.params.t_dof = 5.0f;
-  p.params.min_gradient_sq = 0.0f;
-  p.params.occlusion_check = 1;
+// A registered method's level problem on the room pair at T, with every robust kernel set to `robust`. The
+// problem points into `method`, which the caller keeps.
+ResidualProblem make_problem(const FramePair& pair, int level, const std::string& name, RobustKernel robust,
+                             const SE3& T, test::MethodUnderTest& method) {
+  RegistrationOptions options = default_registration_options(name);
+  test::set_robust_kernels(options, robust);
+  options.set("finest_level_photometric_step", 1);
+  options.set("min_gradient", 0.0);
+  method = test::method_under_test(name, options, make_backend("cpu"));
+  if (method.dense == nullptr) return ResidualProblem{};
+  ResidualProblem p = method.dense->level_problem(pair.cur, pair.ref, level, T);
   p.inputs_version = 1;
   return p;
 }
 
 double max_abs_diff(const Matrix6d& a, const Matrix6d& b) { return (a - b).cwiseAbs().maxCoeff(); }
 
-struct MethodCase {
-  const char* name;
-  int method;
-  int robust;
-};
-
+using MethodCase = std::tuple<std::string, RobustKernel>;
 class BackendsAgree : public ::testing::TestWithParam<MethodCase> {};
 
 TEST_P(BackendsAgree, OnTheNormalEquationsAndTheSolvedStep) {
   HF_SKIP_WITHOUT_OPENCL();
   const FramePair& pair = room_pair();
-  const MethodCase mc = GetParam();
+  const auto& [name, robust] = GetParam();
+  const std::string label = name + "/" + test::robust_name(robust);
   CpuReductionBackend cpu;
   opencl::OpenClReductionBackend cl_backend;
   // Start 1 cm / ~0.6 degrees off the true motion so the step is a real correction, at both levels.
@@ -214,40 +199,42 @@ TEST_P(BackendsAgree, OnTheNormalEquationsAndTheSolvedStep) {
   delta << 0.004, -0.006, 0.008, 0.01, -0.004, 0.006;
   const SE3 T0 = SE3::exp(delta) * pair.T_ref_cur_true;
   for (int level = 0; level < 2; ++level) {
-    ResidualProblem p = make_problem(pair, level, mc.method, mc.robust, T0);
+    test::MethodUnderTest method;
+    ResidualProblem p = make_problem(pair, level, name, robust, T0, method);
+    if (method.dense == nullptr) GTEST_SKIP() << name << " is not a per-pixel method";
     p.inputs_version = std::uint64_t(level + 1);
     const NormalEquations a = cpu.reduce(p);
     const NormalEquations b = cl_backend.reduce(p);
-    ASSERT_GT(a.count, 500) << mc.name << " level " << level;
-    EXPECT_EQ(a.count, b.count) << mc.name << " level " << level;
+    ASSERT_GT(a.count, 500) << label << " level " << level;
+    EXPECT_EQ(a.count, b.count) << label << " level " << level;
     // 1e-6 relative (to the largest entry) on H, g and the cost.
-    EXPECT_LE(max_abs_diff(a.JtJ, b.JtJ), 1e-6 * a.JtJ.cwiseAbs().maxCoeff()) << mc.name << " level " << level;
-    EXPECT_LE((a.Jtr - b.Jtr).cwiseAbs().maxCoeff(), 1e-6 * a.Jtr.cwiseAbs().maxCoeff()) << mc.name;
-    EXPECT_NEAR(a.cost, b.cost, 1e-6 * a.cost) << mc.name;
+    EXPECT_LE(max_abs_diff(a.JtJ, b.JtJ), 1e-6 * a.JtJ.cwiseAbs().maxCoeff()) << label << " level " << level;
+    EXPECT_LE((a.Jtr - b.Jtr).cwiseAbs().maxCoeff(), 1e-6 * a.Jtr.cwiseAbs().maxCoeff()) << label;
+    EXPECT_NEAR(a.cost, b.cost, 1e-6 * a.cost) << label;
     // The step the driver would take, from the driver's own solver: 1e-9 (radians, metres).
     const GaussNewtonStep sa = solve_gauss_newton_step(a.JtJ, a.Jtr, 1e-6);
     const GaussNewtonStep sb = solve_gauss_newton_step(b.JtJ, b.Jtr, 1e-6);
     ASSERT_TRUE(sa.finite && sb.finite);
-    EXPECT_GT(sa.xi.norm(), 1e-4) << mc.name << ": the step should be a real correction";
+    EXPECT_GT(sa.xi.norm(), 1e-4) << label << ": the step should be a real correction";
     EXPECT_LE((sa.xi - sb.xi).cwiseAbs().maxCoeff(), 1e-9)
-        << mc.name << " level " << level << "\ncpu    " << sa.xi.transpose() << "\nopencl " << sb.xi.transpose();
+        << label << " level " << level << "\ncpu    " << sa.xi.transpose() << "\nopencl " << sb.xi.transpose();
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Methods, BackendsAgree,
-    ::testing::Values(MethodCase{"icp", HF_REG_ICP, HF_ROBUST_NONE}, MethodCase{"icp_huber", HF_REG_ICP, HF_ROBUST_HUBER},
-                      MethodCase{"photometric", HF_REG_PHOTOMETRIC, HF_ROBUST_NONE},
-                      MethodCase{"photometric_t", HF_REG_PHOTOMETRIC, HF_ROBUST_STUDENT_T},
-                      MethodCase{"combined", HF_REG_COMBINED, HF_ROBUST_NONE},
-                      MethodCase{"combined_robust", HF_REG_COMBINED, HF_ROBUST_HUBER}),
-    [](const ::testing::TestParamInfo<MethodCase>& info) { return std::string(info.param.name); });
+INSTANTIATE_TEST_SUITE_P(Registry, BackendsAgree,
+                         ::testing::Combine(::testing::ValuesIn(registration_names()),
+                                            ::testing::Values(RobustKernel::none, RobustKernel::huber,
+                                                              RobustKernel::student_t)),
+                         [](const auto& info) {
+                           return std::get<0>(info.param) + "_" + test::robust_name(std::get<1>(info.param));
+                         });
 
 TEST(OpenClBackend, ReusesUploadedMapsWhileTheInputsVersionHolds) {
   HF_SKIP_WITHOUT_OPENCL();
   const FramePair& pair = room_pair();
   opencl::OpenClReductionBackend backend;
-  ResidualProblem p = make_problem(pair, 1, HF_REG_COMBINED, HF_ROBUST_HUBER, pair.T_ref_cur_true);
+  test::MethodUnderTest method;
+  ResidualProblem p = make_problem(pair, 1, "combined", RobustKernel::huber, pair.T_ref_cur_true, method);
   p.inputs_version = 42;
   const NormalEquations first = backend.reduce(p);
   EXPECT_EQ(backend.uploads(), 1u);
@@ -266,7 +253,7 @@ TEST(OpenClBackend, ReusesUploadedMapsWhileTheInputsVersionHolds) {
   p.inputs_version = 43;
   backend.reduce(p);
   EXPECT_EQ(backend.uploads(), 2u);
-  p = make_problem(pair, 0, HF_REG_COMBINED, HF_ROBUST_HUBER, pair.T_ref_cur_true);
+  p = make_problem(pair, 0, "combined", RobustKernel::huber, pair.T_ref_cur_true, method);
   p.inputs_version = 43;
   const NormalEquations level0 = backend.reduce(p);
   EXPECT_EQ(backend.uploads(), 3u);
@@ -277,8 +264,11 @@ TEST(OpenClBackend, ReusesUploadedMapsWhileTheInputsVersionHolds) {
 TEST(OpenClBackend, MapsAMethodDoesNotReadMayBeNull) {
   HF_SKIP_WITHOUT_OPENCL();
   const FramePair& pair = room_pair();
-  ResidualProblem p = make_problem(pair, 1, HF_REG_ICP, HF_ROBUST_NONE, pair.T_ref_cur_true);
-  p.cur_intensity = p.ref_intensity = p.ref_grad_x = p.ref_grad_y = nullptr;
+  test::MethodUnderTest method;
+  ResidualProblem p = make_problem(pair, 1, "icp", RobustKernel::none, pair.T_ref_cur_true, method);
+  for (int slot : {HF_REG_IN_CUR_INTENSITY, HF_REG_IN_REF_INTENSITY, HF_REG_IN_REF_GRAD_X, HF_REG_IN_REF_GRAD_Y}) {
+    EXPECT_EQ(p.maps[slot].data, nullptr);  // the driver binds only what icp reads
+  }
   opencl::OpenClReductionBackend backend;
   CpuReductionBackend cpu;
   EXPECT_EQ(backend.reduce(p).count, cpu.reduce(p).count);
@@ -287,11 +277,12 @@ TEST(OpenClBackend, MapsAMethodDoesNotReadMayBeNull) {
 TEST(OpenClBackend, MalformedProblemIsAnError) {
   HF_SKIP_WITHOUT_OPENCL();
   const FramePair& pair = room_pair();
-  ResidualProblem p = make_problem(pair, 1, HF_REG_PHOTOMETRIC, HF_ROBUST_NONE, pair.T_ref_cur_true);
-  p.ref_grad_x = nullptr;
+  test::MethodUnderTest method;
+  ResidualProblem p = make_problem(pair, 1, "photometric", RobustKernel::none, pair.T_ref_cur_true, method);
+  p.maps[HF_REG_IN_REF_GRAD_X] = {};
   opencl::OpenClReductionBackend backend;
   EXPECT_THROW(backend.reduce(p), Error);
-  p = make_problem(pair, 1, HF_REG_ICP, HF_ROBUST_NONE, pair.T_ref_cur_true);
+  p = make_problem(pair, 1, "icp", RobustKernel::none, pair.T_ref_cur_true, method);
   p.camera.width = 0;
   EXPECT_THROW(backend.reduce(p), Error);
 }

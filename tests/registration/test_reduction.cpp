@@ -2,13 +2,17 @@
 // degeneracy-aware solve, and the registries.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
+#include <optional>
 #include <random>
 
 #include "core/error.h"
+#include "reg_test_util.h"
+#include "registration/combined.h"
 #include "registration/cpu_backend.h"
 #include "registration/gauss_newton.h"
-#include "registration/kernels/residuals.h"
+#include "registration/kernels/icp_kernel.h"
 #include "registration/reduction.h"
 #include "registration/registration.h"
 
@@ -51,30 +55,52 @@ struct RandomMaps {
     }
   }
 
-  ResidualProblem problem(int method) const {
-    ResidualProblem p;
-    p.camera = K;
-    p.cur_vertices = cv.data();
-    p.cur_normals = cn.data();
-    p.cur_intensity = ci.data();
-    p.ref_vertices = rv.data();
-    p.ref_normals = rn.data();
-    p.ref_intensity = ri.data();
-    p.ref_grad_x = gx.data();
-    p.ref_grad_y = gy.data();
-    p.T_ref_cur = to_transform12(SE3::exp((Vector6d() << 0.01, -0.02, 0.005, 0.01, 0.02, -0.01).finished()));
-    p.params.method = method;
-    p.params.max_dist_m = 0.1f;
-    p.params.min_normal_cos = 0.5f;
-    p.params.icp_weight = 1.0f;
-    p.params.rgb_weight = 0.3f;
-    p.params.robust_icp = HF_ROBUST_HUBER;
-    p.params.scale_icp = 0.01f;
-    p.params.robust_rgb = HF_ROBUST_STUDENT_T;
-    p.params.scale_rgb = 0.05f;
-    p.params.t_dof = 5.0f;
-    p.params.occlusion_check = 1;
+  // The maps as one-level pyramids (current, reference).
+  FramePyramid pyramid(bool current) const {
+    FramePyramidLevel level;
+    level.camera.fx = K.fx;
+    level.camera.fy = K.fy;
+    level.camera.cx = K.cx;
+    level.camera.cy = K.cy;
+    level.camera.width = K.width;
+    level.camera.height = K.height;
+    auto fill = [&](auto& image, const auto& values) {
+      image = std::remove_reference_t<decltype(image)>(K.width, K.height);
+      std::copy(values.begin(), values.end(), image.data());
+    };
+    fill(level.vertices, current ? cv : rv);
+    fill(level.normals, current ? cn : rn);
+    fill(level.intensity, current ? ci : ri);
+    fill(level.grad_x, gx);  // the current frame's gradients are never read
+    fill(level.grad_y, gy);
+    FramePyramid p;
+    p.levels.push_back(std::move(level));
     return p;
+  }
+};
+
+const SE3 kOffset = SE3::exp((Vector6d() << 0.01, -0.02, 0.005, 0.01, 0.02, -0.01).finished());
+
+// One registered method's level-0 problem on the random maps, with its options (default: the method's defaults,
+// occlusion check on and a 0.3 photometric weight where the method has them).
+struct MethodProblem {
+  FramePyramid cur, ref;
+  test::MethodUnderTest method;
+  ResidualProblem problem;
+
+  MethodProblem(const RandomMaps& maps, const std::string& name, RegistrationOptions options)
+      : cur(maps.pyramid(true)), ref(maps.pyramid(false)) {
+    options.set("rgb_weight", 0.3);
+    method = test::method_under_test(name, options, make_backend("cpu"));
+    if (method.dense != nullptr) problem = method.dense->level_problem(cur, ref, 0, kOffset);
+  }
+  // Photometric rows on every pixel.
+  MethodProblem(const RandomMaps& maps, const std::string& name) : MethodProblem(maps, name, every_pixel(name)) {}
+
+  static RegistrationOptions every_pixel(const std::string& name) {
+    RegistrationOptions o = default_registration_options(name);
+    o.set("finest_level_photometric_step", 1);
+    return o;
   }
 };
 
@@ -84,9 +110,8 @@ NormalEquations naive_sum(const ResidualProblem& p) {
   for (int y = 0; y < p.height(); ++y) {
     for (int x = 0; x < p.width(); ++x) {
       hf_reg_row rows[HF_REG_MAX_ROWS];
-      const int n = hf_reg_pixel(x, y, p.cur_vertices, p.cur_normals, p.cur_intensity, p.ref_vertices,
-                                 p.ref_normals, p.ref_intensity, p.ref_grad_x, p.ref_grad_y, p.camera, p.T_ref_cur,
-                                 p.params, rows);
+      const hf_reg_maps maps = p.kernel_maps();
+      const int n = p.kernel->pixel(x, y, &maps, p.camera, p.T_ref_cur, p.params, rows);
       for (int k = 0; k < n; ++k) {
         Vector6d J;
         for (int i = 0; i < 6; ++i) J(i) = rows[k].J[i];
@@ -100,11 +125,13 @@ NormalEquations naive_sum(const ResidualProblem& p) {
   return ne;
 }
 
-class CpuBackend : public ::testing::TestWithParam<int> {};
+class CpuBackend : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(CpuBackend, EqualsNaiveDoubleSum) {
   const RandomMaps maps(7);
-  const ResidualProblem p = maps.problem(GetParam());
+  const MethodProblem mp(maps, GetParam());
+  if (mp.method.dense == nullptr) GTEST_SKIP() << GetParam() << " is not a per-pixel method";
+  const ResidualProblem& p = mp.problem;
   CpuReductionBackend backend(5);  // chunks that do not divide the height
   const NormalEquations got = backend.reduce(p);
   const NormalEquations want = naive_sum(p);
@@ -119,40 +146,54 @@ TEST_P(CpuBackend, EqualsNaiveDoubleSum) {
 
 TEST_P(CpuBackend, DeterministicAcrossChunkings) {
   const RandomMaps maps(11);
-  const ResidualProblem p = maps.problem(GetParam());
+  const MethodProblem mp(maps, GetParam());
+  if (mp.method.dense == nullptr) GTEST_SKIP() << GetParam() << " is not a per-pixel method";
+  const ResidualProblem& p = mp.problem;
   CpuReductionBackend a(8);
   const NormalEquations x = a.reduce(p), y = a.reduce(p);
   // Same chunking: bit-identical whatever the thread scheduling.
   EXPECT_EQ(x.to_sums(), y.to_sums());
 }
 
-INSTANTIATE_TEST_SUITE_P(Methods, CpuBackend, ::testing::Values(HF_REG_ICP, HF_REG_PHOTOMETRIC, HF_REG_COMBINED));
+INSTANTIATE_TEST_SUITE_P(Registry, CpuBackend, ::testing::ValuesIn(registration_names()),
+                         [](const auto& info) { return info.param; });
 
-// The AVX2 path (registration/cpu_backend_avx2.h) evaluates the scalar kernel's rows bit for bit, so against the
-// pixel-by-pixel loop only the order of the double sums differs: agreement to 1e-12 relative. Covered: widths
-// that are and are not multiples of the eight lanes, photometric grids 1-3, every robust kernel, and invalid
-// pixels whose other fields are NaN (the lanes' masks must keep them out, as the scalar kernel's early returns do).
-TEST(CpuBackendAvx2, SameRowsAsThePixelLoop) {
+// A method's AVX2 path (DenseKernel::rows_avx2, registration/cpu_backend_avx2.h) evaluates its scalar kernel's
+// rows bit for bit, so against the pixel-by-pixel loop only the order of the double sums differs: agreement to
+// 1e-12 relative; a method without one runs its pixel loop on the vectorised backend too (the same rows, never
+// none). Covered for every registered method: widths that are and are not multiples of the eight lanes,
+// photometric grids 1-3, every robust kernel, and invalid pixels whose other fields are NaN (the lanes' masks must
+// keep them out, as the scalar kernel's early returns do).
+TEST_P(CpuBackend, VectorisedPathGivesThePixelLoopsRows) {
   CpuReductionBackend simd(5, true), scalar(5, false);
   if (!simd.vectorised()) GTEST_SKIP() << "this processor has no AVX2: only the pixel loop runs here";
   EXPECT_FALSE(scalar.vectorised());
+  const std::string name = GetParam();
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (const auto& [width, height] : {std::pair{64, 48}, std::pair{61, 47}, std::pair{13, 9}}) {
     RandomMaps maps(21, width, height);
     for (size_t i = 0; i < maps.cv.size(); i += 5) maps.cv[i] = hf_make_float4(nan, nan, nan, 0.0f);
     for (size_t i = 2; i < maps.rv.size(); i += 7) maps.rv[i] = hf_make_float4(nan, nan, nan, 0.0f);
     for (size_t i = 3; i < maps.rn.size(); i += 11) maps.rn[i] = hf_make_float4(nan, nan, nan, 0.0f);
-    for (int method : {HF_REG_ICP, HF_REG_PHOTOMETRIC, HF_REG_COMBINED}) {
+    {
       for (int step : {1, 2, 3}) {
-        for (int robust : {HF_ROBUST_NONE, HF_ROBUST_HUBER, HF_ROBUST_STUDENT_T}) {
+        for (RobustKernel robust : {RobustKernel::none, RobustKernel::huber, RobustKernel::student_t}) {
           for (int occlusion : {0, 1}) {
-            ResidualProblem p = maps.problem(method);
-            p.params.photometric_step = step;
-            p.params.robust_icp = p.params.robust_rgb = robust;
-            p.params.occlusion_check = occlusion;
+            RegistrationOptions options = default_registration_options(name);
+            options.set("finest_level_photometric_step", step);
+            options.set("photometric_occlusion_check", occlusion);
+            test::set_robust_kernels(options, robust);
+            const MethodProblem mp(maps, name, options);
+            if (mp.method.dense == nullptr) GTEST_SKIP() << name << " is not a per-pixel method";
+            const ResidualProblem& p = mp.problem;
+            if (width == 64 && step == 1 && robust == RobustKernel::none && occlusion == 0) {
+              std::printf("%s: %s\n", name.c_str(),
+                          simd.vectorises(*p.kernel) ? "AVX2 path" : "no AVX2 path: the pixel loop runs");
+            }
             const NormalEquations a = simd.reduce(p), b = scalar.reduce(p);
-            SCOPED_TRACE(testing::Message() << width << "x" << height << " method " << method << " step " << step
-                                            << " robust " << robust << " occlusion " << occlusion);
+            SCOPED_TRACE(testing::Message() << width << "x" << height << " " << name << " step " << step
+                                            << " robust " << test::robust_name(robust) << " occlusion "
+                                            << occlusion);
             ASSERT_GT(b.count, 2);
             EXPECT_EQ(a.count, b.count);
             ASSERT_TRUE(a.JtJ.allFinite() && a.Jtr.allFinite() && std::isfinite(a.cost));
@@ -185,13 +226,16 @@ TEST(NormalEquations, SumsRoundTripInDocumentedOrder) {
 TEST(Kernels, IcpRowMatchesFiniteDifference) {
   // d r / d xi of r(xi) = <v_ref - exp(xi) v, n> at xi = 0 equals J (eq. 24).
   const RandomMaps maps(3);
-  ResidualProblem p = maps.problem(HF_REG_ICP);
-  p.params.robust_icp = HF_ROBUST_NONE;
+  RegistrationOptions options = default_registration_options("icp");
+  test::set_robust_kernels(options, RobustKernel::none);
+  const MethodProblem mp(maps, "icp", options);
+  const ResidualProblem& p = mp.problem;
+  const hf_reg_maps kernel_maps = p.kernel_maps();
   hf_reg_row row;
   int px = -1;
   for (int x = 10; x < 50 && px < 0; ++x) {
-    if (hf_icp_pixel(x, 20, p.cur_vertices, p.cur_normals, p.ref_vertices, p.ref_normals, p.camera, p.T_ref_cur,
-                     p.params, &row)) {
+    if (hf_icp_pixel(x, 20, &kernel_maps, p.camera, p.T_ref_cur, *static_cast<const hf_icp_params*>(p.params),
+                     &row)) {
       px = x;
     }
   }
@@ -259,16 +303,76 @@ TEST(Registry, NamesAndErrors) {
   }
   EXPECT_THROW(make_backend("cuda"), Error);
   EXPECT_EQ(make_backend("cpu")->name(), "cpu");
-  RegistrationOptions bad;
-  bad.max_dist_m = -1.0f;
+  RegistrationOptions bad = default_registration_options("icp");
+  bad.method_as<IcpOptions>().max_dist_m = -1.0f;
   EXPECT_THROW(make_registration("icp", bad, make_backend("cpu")), Error);
+  // Options of another method, or none, are an error naming the mix-up, not a crash.
+  EXPECT_THROW(make_registration("icp", default_registration_options("photometric"), make_backend("cpu")), Error);
+  EXPECT_THROW(make_registration("icp", RegistrationOptions(), make_backend("cpu")), Error);
+}
+
+// Each method owns its knobs; the driver's are shared. Every key appears once in a method's flat namespace (so a
+// JSON object of them is unambiguous), set() reaches it, and a copy is deep.
+TEST(Options, EveryKeyOnceSetReachesItCopiesAreDeep) {
+  for (const std::string& name : registration_names()) {
+    RegistrationOptions o = default_registration_options(name);
+    std::vector<std::string> keys;
+    o.for_each_option([&keys](const char* k, auto&) { keys.emplace_back(k); });
+    std::vector<std::string> sorted = keys;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_EQ(std::adjacent_find(sorted.begin(), sorted.end()), sorted.end()) << name << ": a key appears twice";
+    EXPECT_NE(std::find(keys.begin(), keys.end(), "iterations"), keys.end()) << name;
+    EXPECT_NO_THROW(o.validate());
+    EXPECT_TRUE(o.set("degeneracy_threshold", 0.25));
+    EXPECT_EQ(o.driver.degeneracy_threshold, 0.25);
+    EXPECT_FALSE(o.set("no_such_knob", 1.0));
+    const RegistrationOptions copy = o;
+    EXPECT_NE(copy.method(), o.method());
+  }
+  RegistrationOptions combined = default_registration_options("combined");
+  EXPECT_TRUE(combined.set("rgb_weight", 0.4));
+  EXPECT_FLOAT_EQ(combined.method_as<CombinedOptions>().rgb_weight, 0.4f);
+  RegistrationOptions icp = default_registration_options("icp");
+  EXPECT_FALSE(icp.set("rgb_weight", 0.4));  // icp has no photometric term
+  EXPECT_THROW(icp.method_as<CombinedOptions>(), Error);
+}
+
+// report.json files written before methods owned their knobs hold every method's keys in one object.
+TEST(Options, FormerKeysMigrateByTheDocumentedRules) {
+  const RegistrationOptions icp = default_registration_options("icp");
+  const RegistrationOptions photometric = default_registration_options("photometric");
+  const RegistrationOptions combined = default_registration_options("combined");
+  using Key = std::optional<std::string>;
+  EXPECT_EQ(migrate_registration_key(icp, "max_dist_m"), Key("max_dist_m"));
+  EXPECT_EQ(migrate_registration_key(icp, "t_dof"), Key("t_dof_icp"));
+  EXPECT_EQ(migrate_registration_key(icp, "rgb_weight"), Key(""));
+  EXPECT_EQ(migrate_registration_key(icp, "huber_rgb"), Key(""));
+  EXPECT_EQ(migrate_registration_key(photometric, "max_dist_m"), Key("occlusion_max_depth_m"));
+  EXPECT_EQ(migrate_registration_key(photometric, "t_dof"), Key("t_dof"));
+  EXPECT_EQ(migrate_registration_key(photometric, "huber_icp_m"), Key(""));
+  EXPECT_EQ(migrate_registration_key(combined, "rgb_weight"), Key("rgb_weight"));
+  EXPECT_EQ(migrate_registration_key(combined, "t_dof"), Key("t_dof"));
+  EXPECT_EQ(migrate_registration_key(combined, "max_dist_m"), Key("max_dist_m"));
+  // The driver alone (no method: the pipeline's groundtruth) keeps the driver's keys and drops the rest.
+  EXPECT_EQ(migrate_registration_key(RegistrationOptions(), "iterations"), Key("iterations"));
+  EXPECT_EQ(migrate_registration_key(RegistrationOptions(), "robust_icp"), Key(""));
+  EXPECT_EQ(migrate_registration_key(icp, "voxel"), std::nullopt);  // never a registration option
 }
 
 TEST(Problem, MissingMapIsAnErrorNotACrash) {
   const RandomMaps maps(1);
-  ResidualProblem p = maps.problem(HF_REG_COMBINED);
-  p.ref_grad_y = nullptr;
+  MethodProblem mp(maps, "combined");
+  ResidualProblem p = mp.problem;
+  p.maps[HF_REG_IN_REF_GRAD_Y] = {};
   CpuReductionBackend backend;
+  try {
+    backend.reduce(p);
+    FAIL() << "expected hf::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("ref_grad_y is missing"), std::string::npos) << e.what();
+  }
+  p = mp.problem;
+  p.kernel = nullptr;
   EXPECT_THROW(backend.reduce(p), Error);
 }
 
