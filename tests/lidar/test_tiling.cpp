@@ -1,0 +1,120 @@
+// Tile-parallel runs equal the single run byte for byte on the class raster, for several splits; tile files
+// round-trip and reject corruption; a tile whose halo assumptions fail says so.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.h"
+#include "lidar/synthetic_settlements.h"
+#include "lidar/tiling.h"
+
+namespace hf::lidar {
+namespace {
+
+BuiltUpOptions options_for(const SyntheticSettlements& scene) {
+  BuiltUpOptions o;
+  o.cell_m = scene.grid.cell_m;
+  o.t_s = scene.t_s;
+  o.areas = scene.areas;
+  return o;
+}
+
+std::vector<TileResult> run_all_tiles(const SyntheticSettlements& scene, const TilePlan& plan, const BuiltUpOptions& o,
+                                      const TileLimits& limits) {
+  std::vector<TileResult> tiles;
+  for (int k = 0; k < plan.count(); ++k) {
+    const CellRect w = plan.window(k);
+    CellRaster raster(plan.grid.window(w.col, w.row, w.width, w.height));
+    raster.add(scene.points);
+    tiles.push_back(run_tile_on(raster, plan, k, o, limits));
+  }
+  return tiles;
+}
+
+TEST(Tiling, SplitRunsEqualTheSingleRun) {
+  const SyntheticSettlements scene = synthetic_settlements({1.0, 21, 300, 0});  // stray points make extra hamlets
+  const BuiltUpOptions o = options_for(scene);
+  CellRaster whole(scene.grid);
+  whole.add(scene.points);
+  const BuiltUpRaster single = built_up_raster(classify_built_up(whole, o), scene.grid);
+  const TileLimits limits{10.0, 20.0};
+  for (const auto& [nx, ny] : {std::pair{1, 1}, {2, 1}, {3, 2}, {5, 3}}) {
+    SCOPED_TRACE(std::to_string(nx) + " x " + std::to_string(ny) + " tiles");
+    const TilePlan plan = plan_tiles(scene.grid, nx, ny, o, limits);
+    EXPECT_EQ(plan.halo_cells, 51);
+    if (nx == 5) {
+      EXPECT_LT(plan.window(0).width, scene.grid.width / 2);  // tiles really see only part of the scene
+    }
+    const BuiltUpRaster merged = merge_tiles(run_all_tiles(scene, plan, o, limits), o.areas);
+    EXPECT_EQ(merged.classes.pixels(), single.classes.pixels());
+    EXPECT_EQ(merged.s.pixels(), single.s.pixels());
+    for (int k = 0; k < kBuiltUpClasses; ++k) {
+      EXPECT_EQ(merged.stats[k].cells, single.stats[k].cells);
+      EXPECT_EQ(merged.stats[k].components, single.stats[k].components);
+      EXPECT_EQ(merged.stats[k].settlements, single.stats[k].settlements);
+    }
+  }
+}
+
+TEST(Tiling, TileFilesRoundTripAndRejectCorruption) {
+  const SyntheticSettlements scene = synthetic_settlements({1.0, 4});
+  const BuiltUpOptions o = options_for(scene);
+  const TilePlan plan = plan_tiles(scene.grid, 3, 1, o, {10.0, 20.0});
+  const auto tiles = run_all_tiles(scene, plan, o, {10.0, 20.0});
+  const auto dir = std::filesystem::temp_directory_path() / ("hf_lidar_tiles_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::vector<TileResult> back;
+  for (const TileResult& t : tiles) {
+    const std::string path = (dir / ("tile_" + std::to_string(t.tile) + ".hflt")).string();
+    write_tile(path, t);
+    back.push_back(read_tile(path));
+    EXPECT_EQ(back.back().cluster_label.pixels(), t.cluster_label.pixels());
+    EXPECT_EQ(back.back().cluster_cells, t.cluster_cells);
+  }
+  EXPECT_EQ(merge_tiles(back, o.areas).classes.pixels(), merge_tiles(tiles, o.areas).classes.pixels());
+  // A missing tile, a repeated tile.
+  EXPECT_THROW(merge_tiles({back[0], back[1]}, o.areas), hf::Error);
+  EXPECT_THROW(merge_tiles({back[0], back[1], back[1]}, o.areas), hf::Error);
+
+  const std::string path = (dir / "tile_0.hflt").string();
+  std::string bytes;
+  {
+    std::ifstream in(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const auto error_of = [&](const std::string& b) -> std::string {
+    const std::string bad = (dir / "bad.hflt").string();
+    std::ofstream(bad, std::ios::binary) << b;
+    try {
+      read_tile(bad);
+    } catch (const hf::Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error_of(bytes.substr(0, bytes.size() - 3)).find("bad.hflt: byte"), std::string::npos);
+  EXPECT_NE(error_of("HFLTILE2" + bytes.substr(8)).find("no HFLTILE1 magic"), std::string::npos);
+  std::string b = bytes;
+  b[b.size() - 2] = 0x7f;  // a label far out of range
+  EXPECT_NE(error_of(b).find("label out of range"), std::string::npos);
+  for (size_t cut = 0; cut < 80; cut += 7) EXPECT_NE(error_of(bytes.substr(0, cut)), "");
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Tiling, UnmetHaloAssumptionsAreReported) {
+  const SyntheticSettlements scene = synthetic_settlements({1.0, 4});
+  const BuiltUpOptions o = options_for(scene);
+  // Houses are up to 8.25 m tall: a 5 m limit must refuse, not guess.
+  const TilePlan plan = plan_tiles(scene.grid, 2, 1, o, {5.0, 20.0});
+  try {
+    run_all_tiles(scene, plan, o, {5.0, 20.0});
+    FAIL() << "no error";
+  } catch (const hf::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("above --max-height-m"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(plan_tiles(scene.grid, 0, 1, o), hf::Error);
+}
+
+}  // namespace
+}  // namespace hf::lidar
