@@ -1,22 +1,18 @@
 // `hashfusion bench`: every registration (and the PCL peers) on every input, with one pipeline configuration;
 // results.{md,json,csv}, won-lost-tie tables and speed/error plots (bench/harness/harness.h, bench/README.md).
 #include <CLI/CLI.hpp>
-#include <atomic>
-#include <csignal>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <sstream>
 
 #include "apps/commands.h"
+#include "apps/interrupt.h"
 #include "bench/harness/harness.h"
 #include "core/error.h"
 
 namespace hf::apps {
 namespace {
-
-std::atomic<bool> g_bench_interrupted{false};
-extern "C" void on_bench_sigint(int) { g_bench_interrupted.store(true); }
 
 struct BenchCliOptions {
   std::vector<std::string> inputs;
@@ -65,19 +61,9 @@ void run_bench_command(const BenchCliOptions& c) {
   o.peer.pixel_stride = c.peer_pixel_stride;
   o.command_line = c.command_line;
   o.source_dir = bench::build_source_dir();
-  o.stop = &g_bench_interrupted;
-
-  g_bench_interrupted.store(false);
-  auto previous = std::signal(SIGINT, on_bench_sigint);
-  bench::BenchReport report;
-  try {
-    report = bench::run_bench(o);
-  } catch (...) {
-    std::signal(SIGINT, previous);
-    throw;
-  }
-  std::signal(SIGINT, previous);
-  if (g_bench_interrupted.load()) std::cerr << "interrupted: results cover the runs finished so far\n";
+  InterruptGuard guard;  // Ctrl-C / SIGTERM: finish the current run, write the results, exit 130 / 143
+  o.stop = guard.flag();
+  const bench::BenchReport report = bench::run_bench(o);
 
   std::cout << "outputs:\n";
   size_t shown = 0;
@@ -90,6 +76,7 @@ void run_bench_command(const BenchCliOptions& c) {
     std::cout << "  " << std::filesystem::absolute(o.out + "/trajectories").string() << "/ ("
               << report.files.size() - shown << " trajectories)\n";
   }
+  guard.exit_if_interrupted("results cover the runs finished so far");
 }
 
 }  // namespace
