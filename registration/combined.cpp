@@ -36,7 +36,9 @@ class CombinedMethod final : public DenseMethod {
   hf_combined_params params_{};
 };
 
-RegistrationOptions defaults() { return RegistrationOptions(GaussNewtonOptions{}, std::make_unique<CombinedOptions>()); }
+RegistrationOptions defaults() {
+  return RegistrationOptions(GaussNewtonOptions{}, std::make_unique<CombinedOptions>());
+}
 
 std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend> backend) {
   return std::make_unique<GaussNewtonRegistration>(
@@ -54,9 +56,7 @@ void CombinedOptions::visit(OptionVisitor& v) {
 void CombinedOptions::validate() const {
   icp.validate();
   photometric.validate();
-  if (!(std::isfinite(rgb_weight) && rgb_weight >= 0.0f)) {
-    throw Error("registration options: rgb_weight must be finite and >= 0");
-  }
+  require_option(std::isfinite(rgb_weight) && rgb_weight >= 0.0f, "rgb_weight must be finite and >= 0");
 }
 
 RegistrationMethod combined_registration_method() { return {"combined", defaults, make}; }

@@ -275,7 +275,8 @@ HF_AVX2_INLINE bool photometric_rows(const ResidualProblem& p, const hf_photomet
     const __m256i i4 = _mm256_slli_epi32(ridx, 2);
     const __m256 vr_z = gather(base + 2, i4), vr_w = gather(base + 3, i4);
     const __m256 occluded =
-        and_(cmp_ne(vr_w, zero), cmp_gt(_mm256_andnot_ps(splat(-0.0f), sub(vr_z, v.z)), splat(prm.occlusion_max_depth_m)));
+        and_(cmp_ne(vr_w, zero),
+             cmp_gt(_mm256_andnot_ps(splat(-0.0f), sub(vr_z, v.z)), splat(prm.occlusion_max_depth_m)));
     valid = _mm256_andnot_ps(occluded, valid);
   }
   const __m256 r = sub(i_ref, gather(map<float>(p, HF_REG_IN_CUR_INTENSITY), px8.index));

@@ -117,7 +117,8 @@ Vector6d balanced_units(const VertexMap& vertices) {
   return unit_scale;
 }
 
-GaussNewtonStep solve_balanced_step(const NormalEquations& ne, const Vector6d& unit_scale, double degeneracy_threshold) {
+GaussNewtonStep solve_balanced_step(const NormalEquations& ne, const Vector6d& unit_scale,
+                                    double degeneracy_threshold) {
   const Matrix6d Hs = unit_scale.asDiagonal() * ne.JtJ * unit_scale.asDiagonal();
   GaussNewtonStep step = solve_gauss_newton_step(Hs, unit_scale.cwiseProduct(ne.Jtr), degeneracy_threshold);
   step.xi = unit_scale.cwiseProduct(step.xi);

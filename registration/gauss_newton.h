@@ -40,7 +40,8 @@ GaussNewtonStep solve_gauss_newton_step(const Matrix6d& H, const Vector6d& g, do
 Vector6d balanced_units(const VertexMap& vertices);
 // The step of solve_gauss_newton_step for H' = S H S, g' = S g, mapped back (xi = S xi'); eigenvalues, condition
 // and weakest direction in the balanced units.
-GaussNewtonStep solve_balanced_step(const NormalEquations& ne, const Vector6d& unit_scale, double degeneracy_threshold);
+GaussNewtonStep solve_balanced_step(const NormalEquations& ne, const Vector6d& unit_scale,
+                                    double degeneracy_threshold);
 
 // Fills result's information, eigenvalues, condition, inliers, cost and inlier ratio from the finest level's
 // normal equations `last` and its balanced step, then its status, T_ref_cur and message by the shared rules: failed

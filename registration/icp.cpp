@@ -35,8 +35,6 @@ std::unique_ptr<Registration> make(const RegistrationOptions& options, std::uniq
       "icp", std::make_unique<IcpMethod>(options.method_as<IcpOptions>()), options, std::move(backend));
 }
 
-bool finite_positive(float v) { return std::isfinite(v) && v > 0.0f; }
-
 }  // namespace
 
 void IcpOptions::visit(OptionVisitor& v) {
@@ -49,15 +47,12 @@ void IcpOptions::visit(OptionVisitor& v) {
 }
 
 void IcpOptions::validate() const {
-  auto check = [](bool ok, const char* what) {
-    if (!ok) throw Error(std::string("registration options: ") + what);
-  };
-  check(finite_positive(max_dist_m), "max_dist_m must be finite and > 0");
-  check(std::isfinite(max_normal_angle_deg) && max_normal_angle_deg > 0.0f && max_normal_angle_deg <= 180.0f,
-        "max_normal_angle_deg must be in (0, 180]");
-  check(finite_positive(huber_icp_m), "huber_icp_m must be finite and > 0");
-  check(finite_positive(t_sigma_icp_m), "t_sigma_icp_m must be finite and > 0");
-  check(finite_positive(t_dof_icp), "t_dof_icp must be finite and > 0");
+  require_option(finite_positive(max_dist_m), "max_dist_m must be finite and > 0");
+  require_option(std::isfinite(max_normal_angle_deg) && max_normal_angle_deg > 0.0f && max_normal_angle_deg <= 180.0f,
+                 "max_normal_angle_deg must be in (0, 180]");
+  require_option(finite_positive(huber_icp_m), "huber_icp_m must be finite and > 0");
+  require_option(finite_positive(t_sigma_icp_m), "t_sigma_icp_m must be finite and > 0");
+  require_option(finite_positive(t_dof_icp), "t_dof_icp must be finite and > 0");
 }
 
 hf_icp_params IcpOptions::kernel_params(float weight) const {

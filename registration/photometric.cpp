@@ -49,8 +49,6 @@ std::unique_ptr<Registration> make(const RegistrationOptions& options, std::uniq
       std::move(backend));
 }
 
-bool finite_positive(float v) { return std::isfinite(v) && v > 0.0f; }
-
 }  // namespace
 
 void PhotometricOptions::visit(OptionVisitor& v) {
@@ -66,17 +64,14 @@ void PhotometricOptions::visit(OptionVisitor& v) {
 }
 
 void PhotometricOptions::validate() const {
-  auto check = [](bool ok, const char* what) {
-    if (!ok) throw Error(std::string("registration options: ") + what);
-  };
-  check(finite_positive(huber_rgb), "huber_rgb must be finite and > 0");
-  check(finite_positive(t_dof), "t_dof must be finite and > 0");
-  check(finite_positive(t_sigma_rgb_init), "t_sigma_rgb_init must be finite and > 0");
-  check(finite_positive(t_sigma_rgb_min), "t_sigma_rgb_min must be finite and > 0");
-  check(std::isfinite(min_gradient) && min_gradient >= 0.0f, "min_gradient must be finite and >= 0");
-  check(finite_positive(occlusion_max_depth_m), "occlusion_max_depth_m must be finite and > 0");
-  check(finest_level_photometric_step >= 1 && finest_level_photometric_step <= 16,
-        "finest_level_photometric_step must be in 1..16");
+  require_option(finite_positive(huber_rgb), "huber_rgb must be finite and > 0");
+  require_option(finite_positive(t_dof), "t_dof must be finite and > 0");
+  require_option(finite_positive(t_sigma_rgb_init), "t_sigma_rgb_init must be finite and > 0");
+  require_option(finite_positive(t_sigma_rgb_min), "t_sigma_rgb_min must be finite and > 0");
+  require_option(std::isfinite(min_gradient) && min_gradient >= 0.0f, "min_gradient must be finite and >= 0");
+  require_option(finite_positive(occlusion_max_depth_m), "occlusion_max_depth_m must be finite and > 0");
+  require_option(finest_level_photometric_step >= 1 && finest_level_photometric_step <= 16,
+                 "finest_level_photometric_step must be in 1..16");
 }
 
 hf_photometric_params PhotometricOptions::kernel_params(int level, float weight, float t_sigma) const {

@@ -15,11 +15,7 @@ namespace hf {
 
 namespace {
 
-void check(bool ok, const std::string& what) {
-  if (!ok) throw Error("registration options: " + what);
-}
-
-bool finite_positive(double v) { return std::isfinite(v) && v > 0.0; }
+void check(bool ok, const char* what) { require_option(ok, what); }
 
 struct Registry {
   std::mutex mutex;
@@ -76,6 +72,10 @@ struct KeySetter {
 };
 
 }  // namespace
+
+void require_option(bool ok, const char* what) {
+  if (!ok) throw Error(std::string("registration options: ") + what);
+}
 
 void GaussNewtonOptions::visit(OptionVisitor& v) {
   v("iterations", iterations);

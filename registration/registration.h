@@ -15,6 +15,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -77,6 +78,10 @@ class MethodOptions {
   virtual void visit(OptionVisitor& v) = 0;  // every knob by its key
   virtual void validate() const = 0;         // hf::Error naming the first bad field
 };
+
+// For MethodOptions::validate(): throws hf::Error "registration options: <what>" unless ok.
+void require_option(bool ok, const char* what);
+inline bool finite_positive(double v) { return v > 0.0 && v < std::numeric_limits<double>::infinity(); }
 
 // Helper for MethodOptions implementations: clone() as a copy.
 template <class Derived>

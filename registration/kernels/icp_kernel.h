@@ -26,14 +26,9 @@ HF_INLINE int hf_icp_pixel(int x, int y, const hf_reg_maps* maps, hf_intrinsics 
   const hf_float4 vc = hf_reg_map4(maps, HF_REG_IN_CUR_VERTICES)[idx];
   const hf_float4 nc = hf_reg_map4(maps, HF_REG_IN_CUR_NORMALS)[idx];
   if (!hf_is_valid4(vc) || !hf_is_valid4(nc)) return 0;
-  const hf_float4 v = hf_reg_transform_point(T, vc);
-  if (!(v.z > 0.0f)) return 0;
-  float px, py;
-  hf_project(K, v, &px, &py);
-  // Nearest pixel; the comparison also rejects NaN.
-  if (!(px > -0.5f && py > -0.5f && px < (float)K.width - 0.5f && py < (float)K.height - 0.5f)) return 0;
-  const int u = (int)(px + 0.5f), w = (int)(py + 0.5f);
-  const int ridx = w * K.width + u;
+  hf_float4 v;
+  const int ridx = hf_reg_associate_nearest(vc, K, T, &v);
+  if (ridx < 0) return 0;
   const hf_float4 vr = hf_reg_map4(maps, HF_REG_IN_REF_VERTICES)[ridx];
   const hf_float4 nr = hf_reg_map4(maps, HF_REG_IN_REF_NORMALS)[ridx];
   if (!hf_is_valid4(vr) || !hf_is_valid4(nr)) return 0;

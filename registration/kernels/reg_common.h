@@ -103,6 +103,18 @@ HF_INLINE hf_float4 hf_reg_rotate(hf_transform12 T, hf_float4 n) {
                         T.m[6] * n.x + T.m[7] * n.y + T.m[8] * n.z, 0.0f);
 }
 
+// Projective data association (report eq. 16): moves the current vertex vc into the reference camera (*v =
+// T vc) and returns the index of the reference pixel nearest to its projection, or -1 when the point is behind the
+// camera or projects outside the image (the comparisons also reject NaN).
+HF_INLINE int hf_reg_associate_nearest(hf_float4 vc, hf_intrinsics K, hf_transform12 T, hf_float4* v) {
+  *v = hf_reg_transform_point(T, vc);
+  if (!(v->z > 0.0f)) return -1;
+  float px, py;
+  hf_project(K, *v, &px, &py);
+  if (!(px > -0.5f && py > -0.5f && px < (float)K.width - 0.5f && py < (float)K.height - 0.5f)) return -1;
+  return (int)(py + 0.5f) * K.width + (int)(px + 0.5f);
+}
+
 // IRLS weight of residual r under a robust kernel with scale > 0. Always in (0, 1] for Huber, (0, (nu+1)/nu] for
 // Student-t, 1 for HF_ROBUST_NONE; never NaN for finite r.
 HF_INLINE float hf_reg_robust_weight(int robust, float r, float scale, float dof) {

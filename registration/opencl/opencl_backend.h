@@ -13,12 +13,11 @@
 // the C++ backend does, so the two agree to the order of the double additions (tests: 1e-6 relative on the
 // normal equations, far tighter in practice); without fp64 the device sums in float (pairwise in the group tree).
 // Buffers: one per input slot (HF_REG_MAX_INPUTS), allocated once at the largest size seen and reused; the input
-// maps are uploaded only when
-// ResidualProblem::inputs_version, a map pointer or the size changes (the driver keeps them across the
-// iterations of one level), so an iteration uploads only its 12-float pose and parameters.
-// Failures: hf::Error for a malformed problem (validate_problem) and for any OpenCL error (naming the call and
-// the error code; a method without an OpenCL kernel is such an error). Thread-safety: one thread at a time per backend object (own command queue); several backends
-// may share the context from different threads.
+// maps are uploaded only when ResidualProblem::inputs_version, a map pointer or the size changes (the driver keeps
+// them across the iterations of one level), so an iteration uploads only its pose and parameters.
+// Failures: hf::Error for a malformed problem (validate_problem), for a method without an OpenCL kernel and for any
+// OpenCL error (naming the call and the error code). Thread-safety: one thread at a time per backend object (own
+// command queue); several backends may share the context from different threads.
 #pragma once
 
 #include <cstddef>

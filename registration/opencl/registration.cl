@@ -83,19 +83,7 @@ HF_INLINE void hf_cl_group_reduce(const hf_cl_acc* sums, __local hf_cl_acc* scra
       __global const float* m4, __global const float* m5, __global const float* m6, __global const float* m7,      \
       __global const float* m8, __global const float* m9, __global const float* m10, __global const float* m11,    \
       hf_intrinsics K, hf_transform12 T, PARAMS p, __global hf_cl_acc* group_sums, __local hf_cl_acc* scratch) {   \
-    hf_reg_maps maps;                                                                                              \
-    maps.map[0] = m0;                                                                                              \
-    maps.map[1] = m1;                                                                                              \
-    maps.map[2] = m2;                                                                                              \
-    maps.map[3] = m3;                                                                                              \
-    maps.map[4] = m4;                                                                                              \
-    maps.map[5] = m5;                                                                                              \
-    maps.map[6] = m6;                                                                                              \
-    maps.map[7] = m7;                                                                                              \
-    maps.map[8] = m8;                                                                                              \
-    maps.map[9] = m9;                                                                                              \
-    maps.map[10] = m10;                                                                                            \
-    maps.map[11] = m11;                                                                                            \
+    const hf_reg_maps maps = {{m0, m1, m2, m3, m4, m5, m6, m7, m8, m9, m10, m11}};                                \
     hf_cl_acc sums[HF_REG_SUMS];                                                                                   \
     for (int k = 0; k < HF_REG_SUMS; ++k) sums[k] = (hf_cl_acc)0;                                                  \
     const int n = K.width * K.height;                                                                              \

@@ -37,12 +37,9 @@ HF_INLINE int hf_symmetric_pixel(int x, int y, const hf_reg_maps* maps, hf_intri
   const hf_float4 vc = hf_reg_map4(maps, HF_REG_IN_CUR_VERTICES)[idx];
   const hf_float4 nc = hf_reg_map4(maps, HF_REG_IN_CUR_NORMALS)[idx];
   if (!hf_is_valid4(vc) || !hf_is_valid4(nc)) return 0;
-  const hf_float4 v = hf_reg_transform_point(T, vc);
-  if (!(v.z > 0.0f)) return 0;
-  float px, py;
-  hf_project(K, v, &px, &py);
-  if (!(px > -0.5f && py > -0.5f && px < (float)K.width - 0.5f && py < (float)K.height - 0.5f)) return 0;
-  const int ridx = (int)(py + 0.5f) * K.width + (int)(px + 0.5f);
+  hf_float4 v;
+  const int ridx = hf_reg_associate_nearest(vc, K, T, &v);
+  if (ridx < 0) return 0;
   const hf_float4 vr = hf_reg_map4(maps, HF_REG_IN_REF_VERTICES)[ridx];
   const hf_float4 nr = hf_reg_map4(maps, HF_REG_IN_REF_NORMALS)[ridx];
   if (!hf_is_valid4(vr) || !hf_is_valid4(nr)) return 0;
@@ -66,7 +63,7 @@ struct SymmetricOptions : MethodOptionsBase<SymmetricOptions> {
     v("min_normal_cos", min_normal_cos);
   }
   void validate() const override {
-    if (!(max_dist_m > 0.0f)) throw Error("registration options: max_dist_m must be > 0");
+    require_option(finite_positive(max_dist_m), "max_dist_m must be finite and > 0");
   }
 };
 
@@ -131,8 +128,8 @@ TEST_F(Plugin, RecoversTheMotionOnEveryBackend) {
     test::expect_finite(r);
     const double et = test::translation_error_m(r.T_ref_cur, pair.T_ref_cur_true);
     const double er = test::rotation_error_deg(r.T_ref_cur, pair.T_ref_cur_true);
-    std::printf("symmetric_test/%s: %s, error %.3f mm %.4f deg, %ld rows\n", name.c_str(), to_string(r.status), et * 1e3, er,
-                r.inliers);
+    std::printf("symmetric_test/%s: %s, error %.3f mm %.4f deg, %ld rows\n", name.c_str(), to_string(r.status),
+                et * 1e3, er, r.inliers);
     EXPECT_TRUE(r.usable()) << name << ": " << r.message;
     EXPECT_GT(r.inliers, 10000) << name;
     EXPECT_LT(et, 0.5e-3) << name;
