@@ -11,9 +11,9 @@
 //                keyframe coded by its coefficients in the eigenspace that reconstructs it best.
 //   ferns        random ferns (Glocker et al. 2015, as in InfiniTAM / ElasticFusion): RGB-D binary tests on an
 //                80x60 frame, block-wise Hamming distance.
-//   thumbnail    the baseline: sum of squared differences of normalised 40x30 intensity + depth thumbnails.
-// The default is the winner of the retrieval measurement in bench/results/appearance.md (precision@1 on the
-// untouched sequences; see default_appearance_index_name()).
+//   thumbnail    the baseline: sum of squared differences of normalised 20x15 intensity + depth thumbnails.
+// The default, ferns, is the winner of the retrieval measurement in bench/results/appearance.md (mean p@1, then
+// p@5, over the untouched sequences; the numbers are in appearance.cpp beside default_appearance_index_name()).
 //
 // Images: colour RGB8, depth metres with 0 = no measurement, both the same size (any size >= the method's code
 // size is accepted; smaller or mismatched images are still coded, never rejected). Colour may be empty: the

@@ -13,24 +13,36 @@ namespace {
 
 using Eigenspace = EigenspacesIndex::Eigenspace;
 
+// An eigenspace while it is built (double); the index keeps it in float (Eigenspace).
+struct Space {
+  Eigen::VectorXd mean;
+  Eigen::MatrixXd basis;
+};
+
+Eigenspace stored(const Space& s) { return Eigenspace{s.mean.cast<float>(), s.basis.cast<float>()}; }
+
 // The thumbnails as columns of a D x N matrix (double: PCA and residuals accumulate in double).
 struct Thumbnails {
   Eigen::MatrixXd X;
   size_t count() const { return size_t(X.cols()); }
 };
 
-double residual_in(const Eigenspace& s, const Eigen::VectorXd& x) {
-  const Eigen::VectorXd y = x - s.mean;
-  const double r = y.squaredNorm() - (s.basis.transpose() * y).squaredNorm();
-  return std::max(0.0, r);  // rounding can make it slightly negative
+// Coefficients c = E^T (x - mu) and squared residual ||x - mu||^2 - ||c||^2 (clamped: rounding can make it
+// slightly negative), in double whatever the storage.
+template <class S>
+double residual_in(const S& s, const Eigen::VectorXd& x, Eigen::VectorXd* coefficients = nullptr) {
+  const Eigen::VectorXd y = x - s.mean.template cast<double>();
+  const Eigen::VectorXd c = s.basis.template cast<double>().transpose() * y;
+  if (coefficients) *coefficients = c;
+  return std::max(0.0, y.squaredNorm() - c.squaredNorm());
 }
 
 // The PCA eigenspace of `members`: their mean, and the eigenvectors of their scatter with the largest eigenvalues,
 // computed from the M x M Gram matrix (M << D). Dimension: the smallest d <= d_max (and <= the rank) at which every
 // member's squared residual is below theta, else the cap.
-Eigenspace fit_eigenspace(const Thumbnails& t, const std::vector<size_t>& members, int d_max, double theta) {
+Space fit_eigenspace(const Thumbnails& t, const std::vector<size_t>& members, int d_max, double theta) {
   const Eigen::Index D = t.X.rows(), M = Eigen::Index(members.size());
-  Eigenspace s;
+  Space s;
   s.mean = Eigen::VectorXd::Zero(D);
   for (size_t m : members) s.mean += t.X.col(Eigen::Index(m));
   s.mean /= double(M);
@@ -61,11 +73,11 @@ Eigenspace fit_eigenspace(const Thumbnails& t, const std::vector<size_t>& member
 
 // An image no eigenspace explains within theta is stored raw, as MDL prefers: a 0-dimensional eigenspace whose
 // mean is the image (residual 0 for it; ||x_q - x||^2 for a query, the thumbnail distance).
-Eigenspace raw_eigenspace(const Eigen::VectorXd& x) { return Eigenspace{x, Eigen::MatrixXd(x.size(), 0)}; }
+Space raw_eigenspace(const Eigen::VectorXd& x) { return Space{x, Eigen::MatrixXd(x.size(), 0)}; }
 
 struct Hypothesis {
   std::vector<size_t> members;  // sorted
-  Eigenspace space;
+  Space space;
   std::vector<double> residuals;  // of the members, same order
 };
 
@@ -74,7 +86,7 @@ Hypothesis grow(const Thumbnails& t, std::vector<size_t> members, const Eigenspa
   std::sort(members.begin(), members.end());
   std::vector<bool> in(t.count(), false);
   for (size_t m : members) in[m] = true;
-  Eigenspace space = fit_eigenspace(t, members, o.max_dimension, theta);
+  Space space = fit_eigenspace(t, members, o.max_dimension, theta);
   for (;;) {
     std::vector<std::pair<double, size_t>> candidates;
     for (size_t j = 0; j < t.count(); ++j) {
@@ -144,7 +156,8 @@ std::vector<size_t> select_mdl(const std::vector<Hypothesis>& hs, size_t n, doub
 }
 
 // Step 4's rule: the eigenspace with the smallest residual (ties: the smaller index).
-size_t best_space(const std::vector<Eigenspace>& spaces, const Eigen::VectorXd& x, double* residual) {
+template <class S>
+size_t best_space(const std::vector<S>& spaces, const Eigen::VectorXd& x, double* residual) {
   size_t best = 0;
   double best_r = std::numeric_limits<double>::infinity();
   for (size_t j = 0; j < spaces.size(); ++j) {
@@ -192,11 +205,12 @@ void EigenspacesIndex::code_in_best_space(size_t slot, bool may_add_raw) {
   size_t j = best_space(spaces_, x, &r);
   const double norm2 = 1.0 + options_.thumbnail.depth_weight * options_.thumbnail.depth_weight;
   if (may_add_raw && r >= options_.residual_fraction * norm2) {
-    spaces_.push_back(raw_eigenspace(x));
+    spaces_.push_back(stored(raw_eigenspace(x)));
     j = spaces_.size() - 1;
     r = 0.0;
   }
-  const Eigen::VectorXd c = spaces_[j].basis.transpose() * (x - spaces_[j].mean);
+  Eigen::VectorXd c;
+  residual_in(spaces_[j], x, &c);
   Code& code = codes_[slot];
   code.space = std::uint32_t(j);
   code.coefficients.assign(c.data(), c.data() + c.size());
@@ -212,7 +226,7 @@ void EigenspacesIndex::rebuild() {
 
   std::vector<Hypothesis> hypotheses;
   for (std::vector<size_t>& seed : make_seeds(t, options_)) hypotheses.push_back(grow(t, std::move(seed), options_, theta));
-  std::vector<Eigenspace> spaces;
+  std::vector<Space> spaces;
   std::vector<bool> covered(n, false);
   for (size_t h : select_mdl(hypotheses, n, double(length_), norm2, options_.error_cost)) {
     for (size_t m : hypotheses[h].members) covered[m] = true;
@@ -223,12 +237,13 @@ void EigenspacesIndex::rebuild() {
   for (int it = 0; it < options_.refinement_iterations; ++it) {
     std::vector<std::vector<size_t>> assigned(spaces.size());
     for (size_t i = 0; i < n; ++i) assigned[best_space(spaces, t.X.col(Eigen::Index(i)), nullptr)].push_back(i);
-    std::vector<Eigenspace> refitted;
+    std::vector<Space> refitted;
     for (size_t j = 0; j < spaces.size(); ++j)
       if (!assigned[j].empty()) refitted.push_back(fit_eigenspace(t, assigned[j], options_.max_dimension, theta));
     spaces = std::move(refitted);
   }
-  spaces_ = std::move(spaces);
+  spaces_.clear();
+  for (const Space& sp : spaces) spaces_.push_back(stored(sp));
   for (size_t i = 0; i < n; ++i) code_in_best_space(i, false);
   built_size_ = n;
   ++builds_;
@@ -253,9 +268,7 @@ std::vector<AppearanceMatch> EigenspacesIndex::query(const ColorImage& colour, c
   std::vector<Eigen::VectorXd> c_q(spaces_.size());
   std::vector<double> r_q(spaces_.size());
   for (size_t j = 0; j < spaces_.size(); ++j) {
-    const Eigen::VectorXd y = x - spaces_[j].mean;
-    c_q[j] = spaces_[j].basis.transpose() * y;
-    r_q[j] = std::max(0.0, y.squaredNorm() - c_q[j].squaredNorm());
+    r_q[j] = residual_in(spaces_[j], x, &c_q[j]);
   }
   std::vector<AppearanceMatch> all(codes_.size());
   for (size_t i = 0; i < codes_.size(); ++i) {
@@ -274,7 +287,7 @@ size_t EigenspacesIndex::bytes_per_keyframe() const {
   if (codes_.empty()) return 0;
   size_t code = 0, model = 0;
   for (const Code& c : codes_) code += c.coefficients.size() * sizeof(float) + sizeof(float) + sizeof(std::uint16_t);
-  for (const Eigenspace& s : spaces_) model += size_t(s.basis.cols() + 1) * length_ * sizeof(double);  // held in double
+  for (const Eigenspace& s : spaces_) model += size_t(s.basis.cols() + 1) * length_ * sizeof(float);
   return (code + model) / codes_.size();
 }
 

@@ -19,10 +19,12 @@ std::vector<float> downsample(const Image& image, int w, int h, int channels, Va
   std::vector<double> sum(size_t(w) * h * channels, 0.0);
   std::vector<int> count(size_t(w) * h, 0);
   if (!image.empty()) {
+    std::vector<size_t> cell_x(size_t(image.width()));
+    for (int x = 0; x < image.width(); ++x) cell_x[size_t(x)] = size_t(long(x) * w / image.width());
     for (int y = 0; y < image.height(); ++y) {
-      const int cy = int(long(y) * h / image.height());
+      const size_t row = size_t(long(y) * h / image.height()) * size_t(w);
       for (int x = 0; x < image.width(); ++x) {
-        const size_t c = size_t(cy) * w + size_t(long(x) * w / image.width());
+        const size_t c = row + cell_x[size_t(x)];
         if (value(image(x, y), &sum[c * channels])) ++count[c];
       }
     }

@@ -18,14 +18,15 @@ struct CellAverage {
 template <class Image, class Value>
 CellAverage block_average(const Image& image, const ThumbnailOptions& o, Value value) {
   CellAverage cells(size_t(o.width) * o.height);
+  std::vector<size_t> cell_x(size_t(image.width()));
+  for (int x = 0; x < image.width(); ++x) cell_x[size_t(x)] = size_t(long(x) * o.width / image.width());
   for (int y = 0; y < image.height(); ++y) {
-    const int cy = int(long(y) * o.height / image.height());
+    const size_t row = size_t(long(y) * o.height / image.height()) * size_t(o.width);
     for (int x = 0; x < image.width(); ++x) {
       double v = 0.0;
       if (!value(image(x, y), v)) continue;
-      const size_t c = size_t(cy) * o.width + size_t(long(x) * o.width / image.width());
-      cells.sum[c] += v;
-      cells.count[c] += 1;
+      cells.sum[row + cell_x[size_t(x)]] += v;
+      cells.count[row + cell_x[size_t(x)]] += 1;
     }
   }
   return cells;

@@ -19,7 +19,9 @@
 namespace hf::slam {
 
 struct ThumbnailOptions {
-  int width = 40, height = 30;  // cells per part (640x480 -> 16x16 pixel blocks)
+  // Cells per part (640x480 -> 32x32 pixel blocks). 20x15 retrieved as well as 40x30 on the tuning part at a
+  // quarter of the memory (bench/results/appearance.tuning.md).
+  int width = 20, height = 15;
   double depth_weight = 1.0;    // weight of the depth part; 0 = intensity only (the depth part is then left out)
   // Throws hf::Error naming the bad field (sizes 1..256, weight finite and >= 0).
   void validate() const;
