@@ -12,5 +12,6 @@ void add_generate_command(CLI::App& app);  // apps/cmd_generate.cpp
 void add_eval_command(CLI::App& app);      // apps/cmd_eval.cpp
 void add_run_command(CLI::App& app);       // apps/cmd_run.cpp
 void add_bench_command(CLI::App& app);     // apps/cmd_bench.cpp
+void add_lidar_command(CLI::App& app);     // apps/cmd_lidar.cpp
 
 }  // namespace hf::apps

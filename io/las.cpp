@@ -238,6 +238,22 @@ bool LasReader::read_chunk(std::vector<LasPoint>& out, std::size_t max_points) {
   return true;
 }
 
+int las_epsg(const LasHeader& header) {
+  int geographic = 0;
+  for (const LasVlr& v : header.vlrs) {
+    if (v.user_id != "LASF_Projection" || v.record_id != 34735 || v.data.size() < 8) continue;
+    const auto key = [&](size_t i) { return get_u16(reinterpret_cast<const char*>(v.data.data()) + 2 * i); };
+    const size_t keys = std::min<size_t>(key(3), v.data.size() / 8 - 1);
+    for (size_t k = 1; k <= keys; ++k) {
+      // Each key: id, tag location (0 = the value is inline), count, value.
+      if (key(4 * k + 1) != 0) continue;
+      if (key(4 * k) == 3072) return key(4 * k + 3);  // ProjectedCSTypeGeoKey
+      if (key(4 * k) == 2048) geographic = key(4 * k + 3);  // GeographicTypeGeoKey
+    }
+  }
+  return geographic;
+}
+
 std::vector<LasPoint> read_las(const std::string& path, LasHeader* header) {
   LasReader reader(path);
   std::vector<LasPoint> all, chunk;

@@ -95,6 +95,10 @@ class LasReader {
   void read_header();
 };
 
+// The EPSG code of the projected (else geographic) CRS in the GeoTIFF key directory VLR (LASF_Projection 34735),
+// 0 when the file states none (AHN3's crops, for one) or states it only as WKT.
+int las_epsg(const LasHeader& header);
+
 // Reads a whole file (convenience for small files; large ones stream through LasReader).
 std::vector<LasPoint> read_las(const std::string& path, LasHeader* header = nullptr);
 

@@ -148,6 +148,19 @@ TEST(Las, ScaleAndOffsetApply) {
   EXPECT_DOUBLE_EQ(read_all(bytes, "m.las")[0].x, 1003.5);
 }
 
+TEST(Las, EpsgFromTheGeoKeyDirectory) {
+  hf::LasHeader h = header_for(2, 1);
+  EXPECT_EQ(hf::las_epsg(h), 0);
+  // Version 1.1.0, 2 keys: GTModelType = projected, ProjectedCSType = 28992 (Amersfoort / RD New).
+  const std::uint16_t keys[] = {1, 1, 0, 2, 1024, 0, 1, 1, 3072, 0, 1, 28992};
+  std::vector<std::uint8_t> data;
+  for (std::uint16_t k : keys) data.push_back(static_cast<std::uint8_t>(k & 0xff)), data.push_back(static_cast<std::uint8_t>(k >> 8));
+  h.vlrs.push_back({"LASF_Projection", 34735, "GeoKeyDirectoryTag", data});
+  hf::LasHeader got;
+  read_all(hf::format_las(h, {}, "m.las"), "m.las", &got);
+  EXPECT_EQ(hf::las_epsg(got), 28992);
+}
+
 TEST(Las, LongerRecordsSkipTheirExtraBytes) {
   hf::LasHeader h = header_for(2, 1);
   h.record_length = 40;  // 12 extra bytes per record

@@ -1,0 +1,184 @@
+// `hashfusion lidar`: built-up-area classification of LiDAR point clouds (lidar/built_up_areas.h; Cvirn), single
+// run, one tile of a tiled run, or the merge of a tiled run (lidar/tiling.h). Writes classes.png (with a legend),
+// classes.tif (GeoTIFF), buildings.png, report.md and report.json to --out.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include "apps/commands.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "io/las.h"
+#include "lidar/class_raster_io.h"
+#include "lidar/footprints.h"
+#include "lidar/report.h"
+#include "lidar/synthetic_settlements.h"
+
+namespace hf::apps {
+namespace {
+
+struct LidarArgs {
+  std::vector<std::string> inputs;
+  std::string out;
+  double cell_m = 0.5, t_s = 2.0, ground_margin_m = 10.0;
+  std::string areas, sweep, tiles, merge, footprints, footprint_layer;
+  int tile = -1, epsg = 0;
+  double max_height_m = 120.0, max_building_m = 300.0;
+};
+
+std::vector<double> numbers(const std::string& text, const std::string& option) {
+  std::vector<double> v;
+  std::stringstream ss(text);
+  for (std::string item; std::getline(ss, item, ',');) {
+    try {
+      size_t used = 0;
+      v.push_back(std::stod(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw Error(option + ": '" + item + "' is not a number");
+    }
+  }
+  return v;
+}
+
+lidar::BuiltUpOptions options_of(const LidarArgs& a) {
+  lidar::BuiltUpOptions o;
+  o.cell_m = a.cell_m, o.t_s = a.t_s;
+  o.heights.ground_margin_m = a.ground_margin_m;
+  if (!a.areas.empty()) {
+    const auto v = numbers(a.areas, "--areas");
+    if (v.size() != 3) throw Error("--areas: expected a1,a2,a3 (m^2)");
+    o.areas = {v[0], v[1], v[2]};
+  }
+  lidar::validate(o);
+  return o;
+}
+
+std::pair<int, int> tile_counts(const std::string& text) {
+  const auto v = numbers(text, "--tiles");
+  if (v.size() != 2 || v[0] < 1 || v[1] < 1 || v[0] != int(v[0]) || v[1] != int(v[1])) throw Error("--tiles: expected NX,NY (whole numbers >= 1)");
+  return {int(v[0]), int(v[1])};
+}
+
+// Rasters and tables of a finished classification (single or merged), with footprint / class validation.
+void write_outputs(const LidarArgs& a, lidar::Report& report, const lidar::BuiltUpRaster& r, const lidar::Mask* footprint_truth,
+                   const lidar::Mask* coverage) {
+  report.raster = &r;
+  if (footprint_truth) report.building_mask = lidar::compare_masks(r.s, *footprint_truth, coverage);
+  lidar::write_class_png(a.out + "/classes.png", r.classes);
+  lidar::write_class_geotiff(a.out + "/classes.tif", r.classes, r.grid, report.epsg);
+  lidar::write_mask_png(a.out + "/buildings.png", r.s, footprint_truth);
+  lidar::write_report(a.out, report);
+  std::cout << lidar::report_markdown(report) << "\noutputs in " << a.out << "\n";
+}
+
+void run_lidar(LidarArgs a) {
+  prepare_output_folder(a.out);
+  lidar::BuiltUpOptions o = options_of(a);
+  lidar::Report report;
+  report.options = o;
+
+  // Synthetic settlements: written as LAS so the run reads them like any survey; their truth validates the run.
+  std::optional<lidar::SyntheticSettlements> scene;
+  if (a.inputs.size() == 1 && a.inputs[0].rfind("synthetic:", 0) == 0) {
+    lidar::SyntheticSettlementOptions so;
+    so.cell_m = a.cell_m;
+    so.seed = static_cast<std::uint64_t>(numbers(a.inputs[0].substr(10), "--input synthetic:SEED").at(0));
+    scene = lidar::synthetic_settlements(so);
+    if (a.areas.empty()) o.areas = scene->areas, report.options.areas = scene->areas;
+    LasHeader h;
+    h.version_minor = 4, h.point_format = 6;
+    h.scale[0] = h.scale[1] = h.scale[2] = 0.001;
+    a.inputs = {a.out + "/synthetic.las"};
+    write_las(a.inputs[0], h, scene->points);
+  }
+  report.inputs = a.inputs;
+
+  lidar::Grid grid;
+  if (!a.merge.empty()) {
+    std::vector<lidar::TileResult> tiles;
+    for (const auto& e : std::filesystem::directory_iterator(a.merge))
+      if (e.path().extension() == ".hflt") tiles.push_back(lidar::read_tile(e.path().string()));
+    if (tiles.empty()) throw Error(a.merge + ": no tile_*.hflt files");
+    std::sort(tiles.begin(), tiles.end(), [](const auto& x, const auto& y) { return x.tile < y.tile; });
+    report.options.t_s = tiles[0].t_s, report.options.cell_m = tiles[0].cell_m;
+    report.tiles = std::to_string(tiles.size()) + " tiles";
+    report.epsg = a.epsg;
+    report.inputs = {a.merge};
+    const lidar::BuiltUpRaster merged = lidar::merge_tiles(tiles, o.areas);
+    std::optional<lidar::Mask> truth, coverage;
+    if (!a.footprints.empty()) {
+      const auto polygons = lidar::read_footprints(a.footprints, a.footprint_layer, &merged.grid);
+      truth = lidar::rasterise_footprints(polygons, merged.grid), coverage = lidar::rasterise_coverage(polygons, merged.grid);
+    }
+    write_outputs(a, report, merged, truth ? &*truth : nullptr, coverage ? &*coverage : nullptr);
+    return;
+  }
+
+  if (a.inputs.empty()) throw Error("--input: at least one LAS file (or synthetic:SEED)");
+  grid = lidar::grid_of_files(a.inputs, o.cell_m);
+  report.epsg = a.epsg > 0 ? a.epsg : las_epsg(LasReader(a.inputs[0]).header());
+
+  if (!a.tiles.empty()) {
+    const auto [nx, ny] = tile_counts(a.tiles);
+    const lidar::TileLimits limits{a.max_height_m, a.max_building_m};
+    const lidar::TilePlan plan = lidar::plan_tiles(grid, nx, ny, o, limits);
+    if (a.tile < 0 || a.tile >= plan.count())
+      throw Error("--tile: expected 0.." + std::to_string(plan.count() - 1) + " with --tiles " + a.tiles);
+    const lidar::TileResult t = lidar::run_tile(a.inputs, plan, a.tile, o, limits, true);
+    const std::string path = a.out + "/tile_" + std::to_string(a.tile) + ".hflt";
+    lidar::write_tile(path, t);
+    std::cout << "tile " << a.tile << " of " << plan.count() << " (halo " << plan.halo_cells << " cells) written to " << path << "\n";
+    return;
+  }
+
+  const lidar::CellRaster raster = lidar::rasterise_files(a.inputs, grid, o.classes, true);
+  lidar::BuiltUp b = lidar::classify_built_up(raster, o);
+  const std::optional<Image<std::uint8_t>> class_truth = scene ? std::optional(scene->classes) : std::nullopt;
+  if (!a.sweep.empty()) {
+    for (double t : numbers(a.sweep, "--sweep-t")) {
+      lidar::reclassify(b, t, o.areas, o.cell_m);
+      lidar::SweepRow row{t, b.profile.stats, std::nullopt};
+      if (class_truth) row.validation = lidar::compare_classes(b.profile.classes, *class_truth);
+      report.sweep.push_back(row);
+    }
+    lidar::reclassify(b, o.t_s, o.areas, o.cell_m);
+  }
+  if (class_truth) report.validation = lidar::compare_classes(b.profile.classes, *class_truth);
+  std::optional<lidar::Mask> truth, coverage;
+  if (!a.footprints.empty()) {
+    const auto polygons = lidar::read_footprints(a.footprints, a.footprint_layer, &grid);
+    truth = lidar::rasterise_footprints(polygons, grid), coverage = lidar::rasterise_coverage(polygons, grid);
+  } else if (scene) {
+    truth = scene->footprints;
+  }
+  const lidar::BuiltUpRaster result = lidar::built_up_raster(b, grid);
+  write_outputs(a, report, result, truth ? &*truth : nullptr, coverage ? &*coverage : nullptr);
+}
+
+}  // namespace
+
+void add_lidar_command(CLI::App& app) {
+  auto args = std::make_shared<LidarArgs>();
+  CLI::App* cmd = app.add_subcommand("lidar", "classify built-up areas (hamlet / village / town / city) in LiDAR point clouds");
+  cmd->add_option("--input", args->inputs, "LAS 1.0-1.4 files (LAZ must be decompressed first), or synthetic:SEED");
+  cmd->add_option("--out", args->out, "output folder")->required();
+  cmd->add_option("--cell-m", args->cell_m, "grid resolution r in metres")->capture_default_str();
+  cmd->add_option("--t", args->t_s, "t^S: dilation radius per metre of building height")->capture_default_str();
+  cmd->add_option("--areas", args->areas, "area thresholds a1,a2,a3 in m^2 (default 50000,1000000,5000000)");
+  cmd->add_option("--ground-margin-m", args->ground_margin_m, "ground box around each building (metres)")->capture_default_str();
+  cmd->add_option("--footprints", args->footprints, "building footprints (any GDAL vector format) to validate the building mask");
+  cmd->add_option("--footprint-layer", args->footprint_layer, "layer of --footprints (default: the first)");
+  cmd->add_option("--epsg", args->epsg, "CRS of the outputs when the LAS files do not state it");
+  cmd->add_option("--sweep-t", args->sweep, "sensitivity analysis over t^S, e.g. 0.5,1,1.5,2,3");
+  cmd->add_option("--tiles", args->tiles, "tiled run: NX,NY tiles over the inputs' grid (with --tile)");
+  cmd->add_option("--tile", args->tile, "the tile (0..NX*NY-1) this process computes; writes OUT/tile_K.hflt");
+  cmd->add_option("--merge", args->merge, "merge the tile_*.hflt files of this folder into the final outputs");
+  cmd->add_option("--max-height-m", args->max_height_m, "tiled run: tallest building expected")->capture_default_str();
+  cmd->add_option("--max-building-m", args->max_building_m, "tiled run: widest building expected")->capture_default_str();
+  cmd->callback([args] { run_lidar(*args); });
+}
+
+}  // namespace hf::apps
