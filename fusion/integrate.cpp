@@ -278,7 +278,7 @@ void update_blocks(VoxelUpdate op, const VolumeParams& volume,
       Voxel* voxels = visible[i].second->voxels.data();
       if (op == VoxelUpdate::deintegrate) {
         // Taking an observation out can move a voxel to either side of the surface: scan the block.
-        const int n = deintegrate_block(voxels, b, frame);
+        const int n = simd ? deintegrate_block_avx2(voxels, b, frame) : deintegrate_block(voxels, b, frame);
         if (n > 0) *surface_free[i] = block_is_surface_free(*visible[i].second) ? 1 : 0;
         n_updated += size_t(n);
         continue;

@@ -187,67 +187,116 @@ HF_AVX2 void band_row_avx2(const float* depth, int width, const double* ray_x, d
   }
 }
 
+namespace {
+
+// What both AVX2 block loops hold for a whole block: the frame's constants as lanes.
+struct BlockLanes {
+  __m256 zero, one, half, fx, fy, cx, cy, width_f, height_f, inf, mu, neg_mu, w, max_weight;
+  __m256 sdf_scale, neg_sdf_scale, weight_scale, inv_weight_scale, weight_max_raw, c255;
+  __m256i width_i, byte, low16;
+  __m256 step_x, step_y, step_z;  // float(x) * s_x per lane, as the scalar loop
+};
+
+HF_AVX2_INLINE BlockLanes block_lanes(const BlockFrame& b, const FrameInputs& in) {
+  BlockLanes l;
+  l.zero = _mm256_setzero_ps(), l.one = splat(1.0f), l.half = splat(0.5f);
+  l.fx = splat(in.K.fx), l.fy = splat(in.K.fy), l.cx = splat(in.K.cx), l.cy = splat(in.K.cy);
+  l.width_f = splat(float(in.K.width)), l.height_f = splat(float(in.K.height));
+  l.width_i = splat_i(in.K.width);
+  l.inf = splat(std::numeric_limits<float>::infinity());
+  l.mu = splat(in.mu), l.neg_mu = splat(-in.mu), l.w = splat(in.w), l.max_weight = splat(in.max_weight);
+  l.sdf_scale = splat(HF_SDF_SCALE), l.neg_sdf_scale = splat(-HF_SDF_SCALE);
+  l.weight_scale = splat(HF_WEIGHT_SCALE), l.inv_weight_scale = splat(1.0f / HF_WEIGHT_SCALE);
+  l.weight_max_raw = splat(float(HF_WEIGHT_MAX_RAW)), l.c255 = splat(255.0f);
+  l.byte = splat_i(0xFF), l.low16 = splat_i(0xFFFF);
+  l.step_x = mul(iota(), splat(b.s_x[0]));
+  l.step_y = mul(iota(), splat(b.s_x[1]));
+  l.step_z = mul(iota(), splat(b.s_x[2]));
+  return l;
+}
+
+// hf_voxel_pixel and hf_observe_voxel_at on block row (y, z): the pixel of each lane, its projective eta, the
+// lanes the frame observes (upd) and their tsdf. False when no lane is observed.
+struct RowObservation {
+  __m256i pixel;
+  __m256 eta, upd, tsdf;
+};
+
+HF_AVX2_INLINE bool observe_row(const BlockFrame& b, int y, int z, const FrameInputs& in, const BlockLanes& l,
+                                RowObservation* o) {
+  float p[3];
+  row_start(b, y, z, p);
+  const __m256 px = add(splat(p[0]), l.step_x), py = add(splat(p[1]), l.step_y), pz = add(splat(p[2]), l.step_z);
+  const __m256 inv_z = div(l.one, pz);
+  const __m256 u = add(add(mul(mul(l.fx, px), inv_z), l.cx), l.half);
+  const __m256 v = add(add(mul(mul(l.fy, py), inv_z), l.cy), l.half);
+  const __m256 inside = and_(and_(and_(and_(cmp_gt(pz, l.zero), cmp_ge(u, l.zero)), cmp_ge(v, l.zero)),
+                                  cmp_lt(u, l.width_f)),
+                             cmp_lt(v, l.height_f));
+  if (none(inside)) return false;
+  o->pixel = _mm256_and_si256(_mm256_add_epi32(_mm256_mullo_epi32(truncate(v), l.width_i), truncate(u)),
+                              as_si(inside));
+  // Lanes outside the image read no depth and get d = 0, which fails d > 0.
+  const __m256 d = gather(in.depth, o->pixel, inside);
+  o->eta = sub(d, pz);
+  o->upd = and_(and_(cmp_gt(d, l.zero), cmp_lt(d, l.inf)), cmp_ge(o->eta, l.neg_mu));
+  if (none(o->upd)) return false;
+  __m256 sdf = o->eta;
+  if (in.incidence != nullptr) {
+    const __m256 c = gather(in.incidence, o->pixel, o->upd);
+    sdf = select(cmp_gt(c, l.zero), mul(o->eta, c), o->eta);
+  }
+  o->tsdf = select(cmp_ge(sdf, l.mu), l.one, select(cmp_le(sdf, l.neg_mu), splat(-1.0f), div(sdf, l.mu)));
+  return true;
+}
+
+// The colour pixels (r | g << 8 | b << 16) of the lanes in mask, 0 elsewhere. Pixel i's bytes are 3 i .. 3 i + 2: a
+// 32-bit load from 3 i - 1 (from 0 for pixel 0) stays inside the image, and the shift drops the byte before.
+HF_AVX2_INLINE __m256i gather_rgb(const hf_uint8* rgb, __m256i pixel, __m256 mask) {
+  const __m256i after_first = _mm256_cmpgt_epi32(pixel, _mm256_setzero_si256());  // -1 or 0
+  const __m256i offset = _mm256_add_epi32(_mm256_mullo_epi32(pixel, splat_i(3)), after_first);
+  const __m256i c = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(rgb), offset,
+                                                as_si(mask), 1);
+  return _mm256_srlv_epi32(c, _mm256_and_si256(after_first, splat_i(8)));
+}
+
+// Round-to-nearest of an sdf in units of HF_SDF_SCALE, clamped (hf_quantise_sdf), as the low 16 bits of each lane.
+HF_AVX2_INLINE __m256i quantise_sdf(__m256 s, const BlockLanes& l) {
+  s = select(cmp_gt(s, l.sdf_scale), l.sdf_scale, select(cmp_lt(s, l.neg_sdf_scale), l.neg_sdf_scale, s));
+  s = select(cmp_ge(s, l.zero), add(s, l.half), sub(s, l.half));
+  return _mm256_and_si256(truncate(s), l.low16);
+}
+
+// hf_quantise_weight of each lane.
+HF_AVX2_INLINE __m256i quantise_weight(__m256 weight, const BlockLanes& l) {
+  __m256 wq = add(mul(weight, l.weight_scale), l.half);
+  wq = select(cmp_gt(wq, l.weight_max_raw), l.weight_max_raw, select(cmp_lt(wq, l.zero), l.zero, wq));
+  return truncate(wq);
+}
+
+}  // namespace
+
 HF_AVX2 int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInputs& in, bool* wrote_surface) {
   if (in.K.width * in.K.height < 2) throw Error("update_block_avx2: the image must have at least two pixels");
-  const hf_intrinsics K = in.K;
-  const __m256 zero = _mm256_setzero_ps(), one = splat(1.0f), half = splat(0.5f);
-  const __m256 fx = splat(K.fx), fy = splat(K.fy), cx = splat(K.cx), cy = splat(K.cy);
-  const __m256 width_f = splat(float(K.width)), height_f = splat(float(K.height));
-  const __m256i width_i = splat_i(K.width);
-  const __m256 inf = splat(std::numeric_limits<float>::infinity());
-  const __m256 mu = splat(in.mu), neg_mu = splat(-in.mu), w = splat(in.w), max_weight = splat(in.max_weight);
-  const __m256 sdf_scale = splat(HF_SDF_SCALE), neg_sdf_scale = splat(-HF_SDF_SCALE);
-  const __m256 weight_scale = splat(HF_WEIGHT_SCALE), inv_weight_scale = splat(1.0f / HF_WEIGHT_SCALE);
-  const __m256 weight_max_raw = splat(float(HF_WEIGHT_MAX_RAW)), c255 = splat(255.0f);
-  const __m256i byte = splat_i(0xFF), low16 = splat_i(0xFFFF);
-  // float(x) * s_x per lane, as the scalar loop.
-  const __m256 step_x = mul(iota(), splat(b.s_x[0]));
-  const __m256 step_y = mul(iota(), splat(b.s_x[1]));
-  const __m256 step_z = mul(iota(), splat(b.s_x[2]));
-
+  const BlockLanes l = block_lanes(b, in);
   int updated = 0;
   __m256i surface = _mm256_setzero_si256();  // lanes that wrote an observed sdf <= 0
   for (int z = 0; z < HF_BLOCK_SIZE; ++z) {
     for (int y = 0; y < HF_BLOCK_SIZE; ++y) {
-      float p[3];
-      row_start(b, y, z, p);
-      const __m256 px = add(splat(p[0]), step_x), py = add(splat(p[1]), step_y), pz = add(splat(p[2]), step_z);
-      // hf_voxel_pixel.
-      const __m256 inv_z = div(one, pz);
-      const __m256 u = add(add(mul(mul(fx, px), inv_z), cx), half);
-      const __m256 v = add(add(mul(mul(fy, py), inv_z), cy), half);
-      const __m256 inside = and_(and_(and_(and_(cmp_gt(pz, zero), cmp_ge(u, zero)), cmp_ge(v, zero)),
-                                      cmp_lt(u, width_f)),
-                                 cmp_lt(v, height_f));
-      if (none(inside)) continue;
-      const __m256i pixel = _mm256_and_si256(
-          _mm256_add_epi32(_mm256_mullo_epi32(truncate(v), width_i), truncate(u)), as_si(inside));
-      // hf_integrate_voxel_at: lanes outside the image read no depth and get d = 0, which fails d > 0.
-      const __m256 d = gather(in.depth, pixel, inside);
-      const __m256 eta = sub(d, pz);
-      const __m256 upd = and_(and_(cmp_gt(d, zero), cmp_lt(d, inf)), cmp_ge(eta, neg_mu));
-      if (none(upd)) continue;
-      __m256 sdf = eta;
-      if (in.incidence != nullptr) {
-        const __m256 c = gather(in.incidence, pixel, upd);
-        sdf = select(cmp_gt(c, zero), mul(eta, c), eta);
-      }
-      const __m256 tsdf = select(cmp_ge(sdf, mu), one, select(cmp_le(sdf, neg_mu), splat(-1.0f), div(sdf, mu)));
+      RowObservation o;
+      if (!observe_row(b, y, z, in, l, &o)) continue;
+      const __m256 upd = o.upd;
 
       // hf_tsdf_update.
       Voxel* row = voxels + hf_voxel_index(0, y, z);
       RowHalves vox = load_row(row);
-      const __m256 W = mul(_mm256_cvtepi32_ps(_mm256_srli_epi32(vox.lo, 16)), inv_weight_scale);  // exact: 2^-4
-      const __m256 D = div(_mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(vox.lo, 16), 16)), sdf_scale);
-      const __m256 W_new = add(W, w);
-      const __m256 inv = div(one, W_new);
-      __m256 s = mul(mul(add(mul(D, W), mul(tsdf, w)), inv), sdf_scale);
-      s = select(cmp_gt(s, sdf_scale), sdf_scale, select(cmp_lt(s, neg_sdf_scale), neg_sdf_scale, s));
-      s = select(cmp_ge(s, zero), add(s, half), sub(s, half));
-      __m256 wq = add(mul(select(cmp_gt(W_new, max_weight), max_weight, W_new), weight_scale), half);
-      wq = select(cmp_gt(wq, weight_max_raw), weight_max_raw, select(cmp_lt(wq, zero), zero, wq));
-      const __m256i lo_new =
-          _mm256_or_si256(_mm256_and_si256(truncate(s), low16), _mm256_slli_epi32(truncate(wq), 16));
+      const __m256 W = mul(_mm256_cvtepi32_ps(_mm256_srli_epi32(vox.lo, 16)), l.inv_weight_scale);  // exact: 2^-4
+      const __m256 D = div(_mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(vox.lo, 16), 16)), l.sdf_scale);
+      const __m256 W_new = add(W, l.w);
+      const __m256 inv = div(l.one, W_new);
+      const __m256 s = mul(mul(add(mul(D, W), mul(o.tsdf, l.w)), inv), l.sdf_scale);
+      const __m256 W_capped = select(cmp_gt(W_new, l.max_weight), l.max_weight, W_new);
+      const __m256i lo_new = _mm256_or_si256(quantise_sdf(s, l), _mm256_slli_epi32(quantise_weight(W_capped, l), 16));
       vox.lo = as_si(select(upd, as_ps(lo_new), as_ps(vox.lo)));
       const __m256i sdf16 = _mm256_srai_epi32(_mm256_slli_epi32(lo_new, 16), 16);
       const __m256i unobserved = _mm256_cmpeq_epi32(_mm256_srli_epi32(lo_new, 16), _mm256_setzero_si256());
@@ -255,28 +304,22 @@ HF_AVX2 int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInp
       surface = _mm256_or_si256(surface, _mm256_and_si256(as_si(upd), written_surface));
 
       if (in.rgb != nullptr) {
-        const __m256 colour = and_(upd, cmp_lt(eta, mu));
+        const __m256 colour = and_(upd, cmp_lt(o.eta, l.mu));
         if (!none(colour)) {
-          // Pixel i's bytes are 3 i .. 3 i + 2: a 32-bit load from 3 i - 1 (from 0 for pixel 0) stays inside the
-          // image, and the shift drops the byte before.
-          const __m256i after_first = _mm256_cmpgt_epi32(pixel, _mm256_setzero_si256());  // -1 or 0
-          const __m256i offset = _mm256_add_epi32(_mm256_mullo_epi32(pixel, splat_i(3)), after_first);
-          __m256i rgb = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(in.rgb),
-                                                   offset, as_si(colour), 1);
-          rgb = _mm256_srlv_epi32(rgb, _mm256_and_si256(after_first, splat_i(8)));
+          const __m256i rgb = gather_rgb(in.rgb, o.pixel, colour);
           const __m256 has_colour = as_ps(_mm256_cmpeq_epi32(
               _mm256_and_si256(_mm256_srli_epi32(vox.hi, 24), splat_i(HF_VOXEL_FLAG_COLOUR)),
               splat_i(HF_VOXEL_FLAG_COLOUR)));
           const __m256 Wc = and_(has_colour, W);
-          const __m256 inv_c = div(one, add(Wc, w));
+          const __m256 inv_c = div(l.one, add(Wc, l.w));
           __m256i hi_new = _mm256_or_si256(vox.hi, splat_i(HF_VOXEL_FLAG_COLOUR << 24));
           hi_new = _mm256_andnot_si256(splat_i(0xFFFFFF), hi_new);  // keep the flags, colour below
           for (int channel = 0; channel < 3; ++channel) {
             const int shift = 8 * channel;
-            const __m256 old_c = _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(vox.hi, shift), byte));
-            const __m256 obs_c = _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(rgb, shift), byte));
-            __m256 c = add(mul(add(mul(old_c, Wc), mul(obs_c, w)), inv_c), half);
-            c = select(cmp_gt(c, c255), c255, c);
+            const __m256 old_c = _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(vox.hi, shift), l.byte));
+            const __m256 obs_c = _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(rgb, shift), l.byte));
+            __m256 c = add(mul(add(mul(old_c, Wc), mul(obs_c, l.w)), inv_c), l.half);
+            c = select(cmp_gt(c, l.c255), l.c255, c);
             hi_new = _mm256_or_si256(hi_new, _mm256_slli_epi32(truncate(c), shift));
           }
           vox.hi = as_si(select(colour, as_ps(hi_new), as_ps(vox.hi)));
@@ -290,6 +333,59 @@ HF_AVX2 int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInp
   return updated;
 }
 
+HF_AVX2 int deintegrate_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInputs& in) {
+  if (in.K.width * in.K.height < 2) throw Error("deintegrate_block_avx2: the image must have at least two pixels");
+  const BlockLanes l = block_lanes(b, in);
+  int updated = 0;
+  for (int z = 0; z < HF_BLOCK_SIZE; ++z) {
+    for (int y = 0; y < HF_BLOCK_SIZE; ++y) {
+      RowObservation o;
+      if (!observe_row(b, y, z, in, l, &o)) continue;
+      // hf_tsdf_downdate, on the observed lanes that hold weight.
+      Voxel* row = voxels + hf_voxel_index(0, y, z);
+      RowHalves vox = load_row(row);
+      const __m256i weight_raw = _mm256_srli_epi32(vox.lo, 16);
+      const __m256 upd = _mm256_andnot_ps(as_ps(_mm256_cmpeq_epi32(weight_raw, _mm256_setzero_si256())), o.upd);
+      if (none(upd)) continue;
+      const __m256 W = mul(_mm256_cvtepi32_ps(weight_raw), l.inv_weight_scale);  // exact: 2^-4
+      const __m256 D = div(_mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(vox.lo, 16), 16)), l.sdf_scale);
+      const __m256 W_old = sub(W, l.w);
+      const __m256i weight_old = quantise_weight(W_old, l);
+      const __m256 reset = as_ps(_mm256_cmpeq_epi32(weight_old, _mm256_setzero_si256()));
+      const __m256 inv = div(l.one, W_old);
+      const __m256 s = mul(mul(sub(mul(D, W), mul(o.tsdf, l.w)), inv), l.sdf_scale);
+      const __m256i lo_new = _mm256_andnot_si256(
+          as_si(reset), _mm256_or_si256(quantise_sdf(s, l), _mm256_slli_epi32(weight_old, 16)));
+      vox.lo = as_si(select(upd, as_ps(lo_new), as_ps(vox.lo)));
+
+      __m256i hi_new = vox.hi;
+      if (in.rgb != nullptr) {
+        const __m256 has_colour = as_ps(_mm256_cmpeq_epi32(
+            _mm256_and_si256(_mm256_srli_epi32(vox.hi, 24), splat_i(HF_VOXEL_FLAG_COLOUR)),
+            splat_i(HF_VOXEL_FLAG_COLOUR)));
+        const __m256 colour = _mm256_andnot_ps(reset, and_(and_(upd, cmp_lt(o.eta, l.mu)), has_colour));
+        if (!none(colour)) {
+          const __m256i rgb = gather_rgb(in.rgb, o.pixel, colour);
+          __m256i c_new = _mm256_andnot_si256(splat_i(0xFFFFFF), vox.hi);  // keep the flags, colour below
+          for (int channel = 0; channel < 3; ++channel) {
+            const int shift = 8 * channel;
+            const __m256 old_c = _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(vox.hi, shift), l.byte));
+            const __m256 obs_c = _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(rgb, shift), l.byte));
+            __m256 c = add(mul(sub(mul(old_c, W), mul(obs_c, l.w)), inv), l.half);
+            c = select(cmp_gt(c, l.c255), l.c255, select(cmp_lt(c, l.zero), l.zero, c));
+            c_new = _mm256_or_si256(c_new, _mm256_slli_epi32(truncate(c), shift));
+          }
+          hi_new = as_si(select(colour, as_ps(c_new), as_ps(hi_new)));
+        }
+      }
+      vox.hi = as_si(select(and_(upd, reset), l.zero, as_ps(hi_new)));
+      store_row(row, vox);
+      updated += count(upd);
+    }
+  }
+  return updated;
+}
+
 #else
 
 void band_row_avx2(const float*, int, const double*, double, const BandFrame&, const BandRow&) {
@@ -298,6 +394,10 @@ void band_row_avx2(const float*, int, const double*, double, const BandFrame&, c
 
 int update_block_avx2(Voxel*, const BlockFrame&, const FrameInputs&, bool*) {
   throw Error("update_block_avx2: this build has no AVX2 path");
+}
+
+int deintegrate_block_avx2(Voxel*, const BlockFrame&, const FrameInputs&) {
+  throw Error("deintegrate_block_avx2: this build has no AVX2 path");
 }
 
 #endif

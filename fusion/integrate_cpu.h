@@ -6,7 +6,7 @@
 //
 // Phase 2, per block: the update of one voxel block by one frame, the shared per-voxel kernel (hf_voxel_pixel,
 // then hf_integrate_voxel_at of fusion/kernels/integrate_kernels.h) on its 512 voxels (update_block); the AVX2
-// spelling takes one block row of eight voxels per step. Its inverse (deintegrate_block) has the plain spelling.
+// spelling takes one block row of eight voxels per step. Its inverse (deintegrate_block) has both spellings too.
 //
 // Why second spellings: the per-voxel kernel is branchy (outside the image, no depth, hidden, colour or not) and
 // gcc does not vectorise it; a block row is exactly eight floats of AVX2 and its eight voxels one 64-byte cache
@@ -76,8 +76,9 @@ int update_block(Voxel* voxels, const BlockFrame& b, const FrameInputs& in, bool
 int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInputs& in, bool* wrote_surface);
 
 // deintegrate()'s loop (fusion/deintegrate.h): hf_deintegrate_voxel_at on the voxels update_block would update, with
-// the same projections (so the same observations, bit for bit). Returns the number of voxels it took an observation
-// out of. Plain only: it runs for the frames whose pose changed, not for every frame.
+// the same projections (so the same observations, bit for bit). Both spellings return the number of voxels they
+// took an observation out of; the AVX2 one has update_block_avx2's preconditions.
 int deintegrate_block(Voxel* voxels, const BlockFrame& b, const FrameInputs& in);
+int deintegrate_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInputs& in);
 
 }  // namespace hf::fusion::detail

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 #include <unordered_map>
@@ -348,6 +349,60 @@ TEST(Deintegrate, BlockLoopIsTheKernelAndInvertsBothSpellings) {
     }
   }
   EXPECT_GT(checked, 10000u);
+}
+
+// The AVX2 spelling of the block loop gives the plain one's bits on random blocks with every edge case the kernel
+// branches on: depth 0, negative, NaN, inf; point-to-plane factors (some unknown) or none; colour or none; voxels
+// unobserved (with stray bits), below the observation weight (reset), at the raw maximum, with and without colour;
+// observation weights from 0.25 to 2.25; blocks across the image border and the camera plane.
+TEST(Deintegrate, Avx2BlockLoopIsThePlainOne) {
+  if (!cpu_has_avx2()) GTEST_SKIP() << "this processor (or build) has no AVX2: only the plain loop runs here";
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  size_t updated = 0, resets = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    BlockCase c = random_block(rng);
+    const int width = 5 + int(rng() % 30), height = 2 + int(rng() % 20);
+    c.in.K = hf_intrinsics{15.0f + 20.0f * U(rng), 15.0f + 20.0f * U(rng), 0.5f * width, 0.5f * height, width,
+                           height};
+    c.in.w = 0.25f + 2.0f * U(rng);
+    c.in.mu = 0.01f + 0.05f * U(rng);
+    c.b.p0[2] = -0.05f + 0.6f * U(rng);
+    c.depth.resize(size_t(width) * height);
+    for (float& d : c.depth) {
+      const unsigned kind = rng() % 16;
+      d = kind == 0 ? 0.0f : kind == 1 ? nan : kind == 2 ? inf : kind == 3 ? -0.3f : c.b.p0[2] + 0.1f * (U(rng) - 0.3f);
+    }
+    std::vector<float> incidence;
+    if (trial % 3 == 0) {
+      incidence.resize(c.depth.size());
+      for (float& f : incidence) f = rng() % 5 == 0 ? 0.0f : 0.2f + 1.3f * U(rng);
+    }
+    c.rgb.resize(3 * c.depth.size());
+    for (hf_uint8& v : c.rgb) v = hf_uint8(rng());
+    c.in.depth = c.depth.data();
+    c.in.incidence = incidence.empty() ? nullptr : incidence.data();
+    c.in.rgb = trial % 4 == 1 ? nullptr : c.rgb.data();
+    for (Voxel& v : c.block.voxels) {
+      const unsigned kind = rng() % 8;
+      if (kind == 0) v = Voxel{hf_int16(rng()), 0, hf_uint8(rng()), 0, 0, hf_uint8(rng() % 2)};  // stray bits
+      if (kind == 1) v.weight = hf_uint16(rng() % 40);                                          // <= 2.5
+      if (kind == 2) v.weight = HF_WEIGHT_MAX_RAW;
+    }
+    VoxelBlock plain = c.block, simd = c.block;
+    const int n_plain = detail::deintegrate_block(plain.voxels.data(), c.b, c.in);
+    const int n_simd = detail::deintegrate_block_avx2(simd.voxels.data(), c.b, c.in);
+    ASSERT_EQ(n_plain, n_simd) << "trial " << trial;
+    for (int i = 0; i < HF_VOXELS_PER_BLOCK; ++i) {
+      ASSERT_EQ(std::memcmp(&plain.voxels[size_t(i)], &simd.voxels[size_t(i)], sizeof(Voxel)), 0)
+          << "trial " << trial << " voxel " << i;
+      resets += c.block.voxels[size_t(i)].weight != 0 && plain.voxels[size_t(i)].weight == 0;
+    }
+    updated += size_t(n_plain);
+  }
+  EXPECT_GT(updated, 5000u);
+  EXPECT_GT(resets, 500u);
 }
 
 // A frame fused at a wrong pose and moved by reintegrate() gives the field of fusing it at the right pose (weights
