@@ -1,0 +1,56 @@
+# `hashfusion lidar` tiled as separate processes (as scripts/lidar_tiles.slurm runs them on a cluster) equals the
+# single run byte for byte on the class rasters (PNG and GeoTIFF); bad input gives one line naming the file.
+# Variables: HASHFUSION (the executable), SCRIPTS (scripts/), DIR (a scratch folder).
+file(REMOVE_RECURSE ${DIR})
+file(MAKE_DIRECTORY ${DIR})
+function(run)
+  execute_process(COMMAND ${HASHFUSION} lidar ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "hashfusion lidar ${ARGN}: exit ${rc}\n${out}\n${err}")
+  endif()
+endfunction()
+
+set(common --cell-m 1 --areas 1500,10000,35000 --t 2)
+run(--input synthetic:3 --out ${DIR}/single ${common})
+set(las ${DIR}/single/synthetic.las)
+# The tiles as six processes through the Slurm script's local mode, then its merge.
+execute_process(COMMAND ${CMAKE_COMMAND} -E env HASHFUSION=${HASHFUSION} HF_INPUTS=${las} HF_OUT=${DIR}/merged HF_TILES=3,2
+                        "HF_ARGS=--cell-m 1 --areas 1500,10000,35000 --t 2 --max-height-m 10 --max-building-m 20"
+                        bash ${SCRIPTS}/lidar_tiles.slurm local
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "lidar_tiles.slurm local: exit ${rc}\n${out}\n${err}")
+endif()
+file(GLOB tile_files ${DIR}/merged/tiles/tile_*.hflt)
+list(LENGTH tile_files n)
+if(NOT n EQUAL 6)
+  message(FATAL_ERROR "expected 6 tile files, found ${n}")
+endif()
+foreach(f classes.png classes.tif)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files ${DIR}/single/${f} ${DIR}/merged/${f} RESULT_VARIABLE differ)
+  if(differ)
+    message(FATAL_ERROR "${f}: the merged tiles differ from the single run")
+  endif()
+endforeach()
+file(READ ${DIR}/single/report.json single_json)
+file(READ ${DIR}/merged/report.json merged_json)
+foreach(cls hamlet village town city)
+  string(JSON a GET "${single_json}" classes ${cls})
+  string(JSON b GET "${merged_json}" classes ${cls})
+  if(NOT a STREQUAL b)
+    message(FATAL_ERROR "classes.${cls}: single ${a} vs merged ${b}")
+  endif()
+endforeach()
+string(JSON f1 GET "${single_json}" validation mean_f1)
+if(NOT f1 EQUAL 1)
+  message(FATAL_ERROR "synthetic settlements: mean F1 ${f1}, expected 1")
+endif()
+
+# Not a LAS file: exit 1, one line naming it and the byte.
+file(WRITE ${DIR}/nope.las "hello")
+execute_process(COMMAND ${HASHFUSION} lidar --input ${DIR}/nope.las --out ${DIR}/bad RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_QUIET)
+string(STRIP "${err}" err)
+if(NOT rc EQUAL 1 OR err MATCHES "\n" OR NOT err MATCHES "nope.las: byte 0: not a LAS file")
+  message(FATAL_ERROR "bad input: exit ${rc}, stderr: ${err}")
+endif()
+file(REMOVE_RECURSE ${DIR})
