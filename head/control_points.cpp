@@ -12,6 +12,7 @@ using Select = std::function<double(const Eigen::Vector3d&)>;
 
 struct Context {
   const TriangleMesh& mesh;
+  const MeshTopology& topology;
   const HeadFrame& frame;
   std::vector<Eigen::Vector3d> ph;  // head-frame positions
   std::vector<ControlPoint> out;
@@ -49,14 +50,36 @@ std::vector<int> members(const ImportantAreas& areas, Area a, const VertexMask* 
   return set;
 }
 
-// The features of area a, or the whole area when it has none.
-std::vector<int> feature_set(const ImportantAreas& areas, Area a, const VertexMask& features) {
+// The features of area a, or the whole area when it has none. With `largest_piece`, only the largest connected
+// piece of the features: stray feature vertices (skin texture, scan noise) would otherwise set the extremes.
+std::vector<int> feature_set(const ImportantAreas& areas, Area a, const VertexMask& features,
+                             const MeshTopology* largest_piece = nullptr) {
   std::vector<int> set = members(areas, a, &features);
-  return set.empty() ? members(areas, a, nullptr) : set;
+  if (set.empty()) return members(areas, a, nullptr);
+  if (!largest_piece) return set;
+  std::vector<int> piece(areas.label.size(), -1), best, current, stack;
+  for (int s : set) {
+    if (piece[s] >= 0) continue;
+    current.clear();
+    stack.assign(1, s);
+    piece[s] = s;
+    while (!stack.empty()) {
+      const int v = stack.back();
+      stack.pop_back();
+      current.push_back(v);
+      for (const int* n = largest_piece->ring_begin(v); n != largest_piece->ring_end(v); ++n)
+        if (piece[*n] < 0 && areas.label[*n] == a && features[*n]) {
+          piece[*n] = s;
+          stack.push_back(*n);
+        }
+    }
+    if (current.size() > best.size()) best = current;
+  }
+  return best;
 }
 
 void eye(Context& c, const ImportantAreas& areas, const VertexMask& features, Area a) {
-  const std::vector<int> set = feature_set(areas, a, features);
+  const std::vector<int> set = feature_set(areas, a, features, &c.topology);
   if (set.empty()) return;
   const std::string name = area_name(a);
   const double outward = a == Area::eye_right ? 1.0 : -1.0;  // +x is the subject's right
@@ -74,7 +97,7 @@ void eye(Context& c, const ImportantAreas& areas, const VertexMask& features, Ar
 }
 
 void lips(Context& c, const ImportantAreas& areas, const VertexMask& features) {
-  const std::vector<int> set = feature_set(areas, Area::lips, features);
+  const std::vector<int> set = feature_set(areas, Area::lips, features, &c.topology);
   const std::vector<int> area = members(areas, Area::lips, nullptr);
   if (set.empty()) return;
   const int right = c.best(set, [](const Eigen::Vector3d& p) { return p.x(); });
@@ -164,9 +187,10 @@ void nose(Context& c, const ImportantAreas& areas, const VertexMask& features) {
 
 }  // namespace
 
-std::vector<ControlPoint> find_control_points(const TriangleMesh& mesh, const HeadFrame& frame,
-                                              const ImportantAreas& areas, const VertexMask& features) {
-  Context c{mesh, frame, {}, {}};
+std::vector<ControlPoint> find_control_points(const TriangleMesh& mesh, const MeshTopology& topology,
+                                              const HeadFrame& frame, const ImportantAreas& areas,
+                                              const VertexMask& features) {
+  Context c{mesh, topology, frame, {}, {}};
   c.ph.resize(mesh.vertices.size());
   for (size_t i = 0; i < mesh.vertices.size(); ++i) c.ph[i] = frame.to_head(mesh.vertices[i]);
   eye(c, areas, features, Area::eye_right);

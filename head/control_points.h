@@ -13,6 +13,7 @@
 //     the profile vertex halfway between them, the alae (extreme x of the nose's features), the subnasale
 //     (deepest profile vertex between the tip and the nose/lips boundary) and each nostril (the nose feature
 //     below the tip nearest the midpoint of that side's ala and the subnasale).
+// Eyes and lips use the largest connected piece of their features (stray vertices would set the extremes).
 // "Within a band": candidates within max(1.5, 5 % of the corner distance) mean edge lengths of the target x (or
 // z), widened up to 8x when empty. A point whose area (or features) is empty is not reported; the caller lists it
 // as missing.
@@ -35,8 +36,9 @@ struct ControlPoint {
   Eigen::Vector3f position;  // input frame (the mesh's own)
 };
 
-std::vector<ControlPoint> find_control_points(const TriangleMesh& mesh, const HeadFrame& frame,
-                                              const ImportantAreas& areas, const VertexMask& features);
+std::vector<ControlPoint> find_control_points(const TriangleMesh& mesh, const MeshTopology& topology,
+                                              const HeadFrame& frame, const ImportantAreas& areas,
+                                              const VertexMask& features);
 
 // The names find_control_points can report, in its order (10 + 10 + 14 + 5 + 5 + 8 = 52).
 std::vector<std::string> control_point_names();

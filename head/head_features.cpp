@@ -116,7 +116,7 @@ HeadFeatureResult detect_head_features(const TriangleMesh& mesh, const HeadFeatu
   {
     StageTimer t(r.stage_ms, "control_points");
     // Control points always come from the area-specific features: the manual features need not cover an area.
-    r.control_points = find_control_points(mesh, r.frame, r.areas, r.area_features.features);
+    r.control_points = find_control_points(mesh, r.topology, r.frame, r.areas, r.area_features.features);
   }
   for (int a = 1; a < kAreaCount; ++a)
     if (r.areas.counts[a] == 0) r.warnings.push_back(std::string("area ") + area_name(static_cast<Area>(a)) + " not found");

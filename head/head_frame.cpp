@@ -17,6 +17,7 @@ namespace {
 struct Pca {
   Eigen::Vector3d centroid;
   Eigen::Matrix3d axes;  // columns, descending variance
+  double rms_radius = 0;
 };
 
 // Stage 1.
@@ -43,6 +44,7 @@ Pca surface_pca(const TriangleMesh& mesh) {
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov / total);
   Pca p;
   p.centroid = c;
+  p.rms_radius = std::sqrt(std::max(0.0, (cov / total).trace()));
   for (int k = 0; k < 3; ++k) p.axes.col(k) = eig.eigenvectors().col(2 - k);
   return p;
 }
@@ -140,14 +142,18 @@ class PointGrid {
 // tip); about 0 along a ridge (a neck stump's cut, a bust's base, a crown's rim); -inf when a sector is empty (an
 // open mesh's border).
 double cap_score(const std::vector<Eigen::Vector3f>& p, const std::vector<Eigen::Vector3f>& normals, const PointGrid& grid,
-                 int i, double rho, Eigen::Vector3d* normal_out) {
+                 int i, double rho, const Eigen::Vector3d& across, Eigen::Vector3d* normal_out) {
   const Eigen::Vector3d c = p[i].cast<double>();
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
   grid.ball(c, 0.5 * rho, [&](int j) { n += normals[j].cast<double>(); });
   if (!(n.norm() > 0)) return -std::numeric_limits<double>::infinity();
   n.normalize();
   *normal_out = n;
-  const Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+  // Sectors start at the symmetry plane's normal projected into the tangent plane, so the score does not depend
+  // on the input's pose (a coordinate-based perpendicular would rotate the sectors with the input).
+  Eigen::Vector3d e1 = across - across.dot(n) * n;
+  e1 = e1.norm() > 1e-6 ? Eigen::Vector3d(e1.normalized()) : n.unitOrthogonal();
+  const Eigen::Vector3d e2 = n.cross(e1);
   constexpr int kSectors = 8;
   double sum[kSectors] = {}, count[kSectors] = {};
   grid.ball(c, rho, [&](int j) {
@@ -203,12 +209,9 @@ HeadFrame find_head_frame(const TriangleMesh& mesh, const MeshTopology& topology
   const Eigen::Vector3d x_axis = best.n;
 
   // Stage 3: the candidates near the plane, scored at scale rho.
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::max()), hi = -lo;
-  for (int i : used) {
-    lo = lo.cwiseMin(mesh.vertices[i].cast<double>());
-    hi = hi.cwiseMax(mesh.vertices[i].cast<double>());
-  }
-  const double rho = std::max(options.cap_scale * (hi - lo).norm(), 3.0 * h);
+  // The scale comes from the surface's RMS radius about its centroid (rotation invariant, unlike a bounding
+  // box).
+  const double rho = std::max(options.cap_scale * pca.rms_radius, 3.0 * h);
   const std::vector<Eigen::Vector3f> normals = mls_vertex_normals(mesh, topology);
   const PointGrid grid(mesh.vertices, used, rho);
   const double band = std::max(options.band_edges * h, 0.01 * rho);
@@ -218,7 +221,7 @@ HeadFrame find_head_frame(const TriangleMesh& mesh, const MeshTopology& topology
   for (int i : used) {
     if (std::abs(x_axis.dot(mesh.vertices[i].cast<double>()) - best.d) > band) continue;
     Eigen::Vector3d n = Eigen::Vector3d::Zero();
-    const double score = cap_score(mesh.vertices, normals, grid, i, rho, &n);
+    const double score = cap_score(mesh.vertices, normals, grid, i, rho, x_axis, &n);
     if (score > tip_score) {
       tip_score = score;
       tip = i;
@@ -227,12 +230,28 @@ HeadFrame find_head_frame(const TriangleMesh& mesh, const MeshTopology& topology
   }
   if (tip < 0 || !std::isfinite(tip_score))
     throw Error("head frame: no vertex near the symmetry plane has a closed neighbourhood to score");
-  frame.nose_tip_vertex = tip;
   frame.cap_score_edges = tip_score * h;
   frame.cap_scale = rho;
   Eigen::Vector3d y_axis = tip_normal - tip_normal.dot(x_axis) * x_axis;
   if (!(y_axis.norm() > 1e-6)) throw Error("head frame: the nose tip's normal lies across the symmetry plane");
   y_axis.normalize();
+  // The cap score is flat across the tip's few central vertices, so a rigid motion's rounding could pick another
+  // of them; the foremost vertex near the plane within rho / 2 along y is well separated (the tip's curvature).
+  {
+    const Eigen::Vector3d c = mesh.vertices[tip].cast<double>();
+    double far = -std::numeric_limits<double>::infinity();
+    int refined = tip;
+    grid.ball(c, 0.5 * rho, [&](int j) {
+      const Eigen::Vector3d p = mesh.vertices[j].cast<double>();
+      if (std::abs(x_axis.dot(p) - best.d) > band) return;
+      if (y_axis.dot(p - c) > far) {
+        far = y_axis.dot(p - c);
+        refined = j;
+      }
+    });
+    tip = refined;
+  }
+  frame.nose_tip_vertex = tip;
 
   // Stage 4: two cues for which side of the tip is up, the more decisive one wins (measured on the four meshes
   // of ../shared/data/head_meshes, each cue alone is wrong on one of them, and there the other is far clearer):

@@ -9,7 +9,7 @@
 //      and the offset as the mean of the midpoints), trimmed to the best 80 % of pairs; the start with the least
 //      residual wins. x is the plane's normal;
 //   3. the nose tip: among vertices within `band` of the plane, the one where the surface falls away from its
-//      tangent plane most in its least-falling direction, at scale rho = cap_scale x the bounding-box diagonal
+//      tangent plane most in its least-falling direction, at scale rho = cap_scale x the surface's RMS radius
 //      (a cap-likeness: the nose tip is a cap, a neck stump's cut, a bust's base and a crown's rim are ridges,
 //      the back of the head is a cap of much larger radius, an open border is excluded). y is the tip's normal
 //      (mean over rho / 2) projected into the plane;
@@ -51,7 +51,7 @@ struct HeadFrameOptions {
   int symmetry_samples = 1500;    // vertices (every n-th) the mirror fit uses
   int symmetry_iterations = 15;
   double band_edges = 1.5;        // half-width of the band of nose-tip candidates, in mean edge lengths
-  double cap_scale = 0.045;       // rho / bounding-box diagonal: about 2.2 cm on libigl's 49 cm head-and-neck box
+  double cap_scale = 0.17;        // rho / RMS radius of the surface: 2.1 cm on libigl's head and neck (12.3 cm)
 };
 
 HeadFrame find_head_frame(const TriangleMesh& mesh, const MeshTopology& topology, const HeadFrameOptions& options = {});

@@ -163,8 +163,10 @@ ImportantAreas find_important_areas(const TriangleMesh& mesh, const MeshTopology
       continue;
     }
     if (coarse[i] == Area::nose) {
-      if (p.z() > out.z_eyes_nose)
-        out.label[i] = p.x() > 0 ? Area::eye_right : Area::eye_left;
+      if (p.z() > out.z_eyes_nose) {
+        // The bridge between the eyes belongs to neither eye: its features would pass for inner corners.
+        if (std::abs(p.x()) >= 0.5 * nose_half_width) out.label[i] = p.x() > 0 ? Area::eye_right : Area::eye_left;
+      }
       else if (p.z() > out.z_nose_lips)
         out.label[i] = options.separation_method == 2 ? Area::none : Area::nose;
       else

@@ -10,7 +10,8 @@
 //      face area's widest point (max |x|), nose/lips boundary two thirds of the way from the tip down to the
 //      face area's lowest point. Method 2: as method 1, but the nose is every mesh vertex in the box between the
 //      nose/lips boundary and the eyes/nose boundary, in front of the nose root (the deepest point of the profile
-//      above the tip), as wide as the face area is in that band near the tip (the area of fig. 5).
+//      above the tip), as wide as the face area is in that band near the tip (the area of fig. 5). The eyes
+//      leave out the bridge between them (|x| under half the nose's half-width).
 // Labels are per vertex; every vertex has exactly one (none where no area).
 #pragma once
 

@@ -1,0 +1,97 @@
+// `hashfusion head-features`: Kubásková's feature recognition on a triangulated head (head/head_features.h) and
+// its outputs (head/feature_outputs.h).
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "apps/commands.h"
+#include "core/error.h"
+#include "head/feature_outputs.h"
+#include "head/feature_spec.h"
+#include "head/head_features.h"
+#include "io/obj.h"
+#include "io/ply.h"
+
+namespace hf::apps {
+namespace {
+
+struct HeadFeaturesArgs {
+  std::string mesh_path, out_dir, method = "discrete", quantity = "mean", threshold, morphology;
+  bool automatic = false;
+  int mls_k = 3, area_k = 0, separation = 2;
+  double truncate_percent = 0;
+  bool no_final_dilation = false;
+};
+
+TriangleMesh read_mesh(const std::string& path) {
+  const std::string ext = std::filesystem::path(path).extension().string();
+  if (ext == ".ply" || ext == ".PLY") return read_ply_mesh(path);
+  if (ext == ".obj" || ext == ".OBJ") return read_obj(path);
+  throw Error(path + ": expected a .ply or .obj mesh");
+}
+
+void run_head_features(const HeadFeaturesArgs& args) {
+  head::HeadFeatureOptions options;
+  options.evaluation = head::parse_evaluation(args.method);
+  options.quantity = head::parse_quantity(args.quantity);
+  if (!args.threshold.empty()) {
+    options.threshold = head::parse_threshold(args.threshold);
+    options.has_threshold = true;
+  }
+  options.morphology = head::parse_morphology(args.morphology);
+  options.automatic = args.automatic;
+  options.truncate_percent = args.truncate_percent;
+  options.mls.k = args.mls_k;
+  options.areas.k = args.area_k;
+  options.areas.separation_method = args.separation;
+  options.areas.final_dilation = !args.no_final_dilation;
+  const TriangleMesh mesh = read_mesh(args.mesh_path);
+  head::HeadFeatureResult result;
+  try {
+    result = head::detect_head_features(mesh, options);
+  } catch (const ParseError&) {
+    throw;
+  } catch (const Error& e) {
+    throw Error(args.mesh_path + ": " + e.what());
+  }
+  head::write_head_feature_outputs(args.out_dir, mesh, result, options, {args.mesh_path});
+  std::cout << args.mesh_path << ": " << mesh.vertices.size() << " vertices, nose tip vertex "
+            << result.frame.nose_tip_vertex << ", " << result.control_points.size() << " of "
+            << head::control_point_names().size() << " control points\n";
+  for (const std::string& w : result.warnings) std::cout << "warning: " << w << "\n";
+  std::cout << "outputs in " << args.out_dir << " (report.md)\n";
+}
+
+}  // namespace
+
+void add_head_features_command(CLI::App& app) {
+  auto args = std::make_shared<HeadFeaturesArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "head-features",
+      "features, important areas and control points of a triangulated human head (Kubasková): curvatures, MLS, "
+      "Laplace-Beltrami, thresholding, mesh morphology");
+  cmd->add_option("--mesh", args->mesh_path, "head mesh, .ply or .obj (any pose and unit)")->required();
+  cmd->add_option("--out", args->out_dir, "output folder (created)")->required();
+  cmd->add_option("--method", args->method, "evaluation for the features: discrete, mls or laplace")
+      ->capture_default_str();
+  cmd->add_option("--quantity", args->quantity, "curvature thresholded (discrete, mls): mean, gaussian, k_max, k_min")
+      ->capture_default_str();
+  cmd->add_option("--threshold", args->threshold,
+                  "a,b: features where the evaluation lies in [a, b] percent of |w_max| (eq. 10); default: from "
+                  "the evaluation's average to 100");
+  cmd->add_option("--morphology", args->morphology, "operators applied to the features, e.g. open:5,dilate:10");
+  cmd->add_option("--truncate", args->truncate_percent, "percent of highest evaluations truncated (section 3.1.3)");
+  cmd->add_flag("--auto", args->automatic, "automatic detection (section 4.5): per-area evaluations and thresholds");
+  cmd->add_option("--mls-k", args->mls_k, "MLS neighbourhood rings")->capture_default_str();
+  cmd->add_option("--area-k", args->area_k, "important-area morphology k (0: 5/10/15 by vertex count)")
+      ->capture_default_str();
+  cmd->add_option("--separation", args->separation, "important-area separation method, 1 or 2 (section 3.3)")
+      ->check(CLI::Range(1, 2))
+      ->capture_default_str();
+  cmd->add_flag("--no-final-dilation", args->no_final_dilation, "skip the important areas' last dilation");
+  cmd->callback([args] { run_head_features(*args); });
+}
+
+}  // namespace hf::apps
