@@ -13,5 +13,6 @@ void add_eval_command(CLI::App& app);      // apps/cmd_eval.cpp
 void add_run_command(CLI::App& app);       // apps/cmd_run.cpp
 void add_bench_command(CLI::App& app);     // apps/cmd_bench.cpp
 void add_lidar_command(CLI::App& app);     // apps/cmd_lidar.cpp
+void add_head_features_command(CLI::App& app);  // apps/cmd_head_features.cpp
 
 }  // namespace hf::apps
