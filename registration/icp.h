@@ -7,7 +7,8 @@
 
 namespace hf {
 
-// The knobs of the point-to-plane term (also combined's geometric term).
+// The knobs of the point-to-plane term (also combined's geometric term). The measurements behind the defaults:
+// bench/results/registration.md ("Method defaults").
 struct IcpOptions : MethodOptionsBase<IcpOptions> {
   // Correspondence rejection, the same gate on every level (KinectFusion: 10 cm, 30 degrees; a wider coarse gate
   // pulls the fast preset into wrong minima).

@@ -10,7 +10,8 @@
 
 namespace hf {
 
-// The knobs of the photometric term (also combined's photometric term). Measurements: bench/results/registration.md.
+// The knobs of the photometric term (also combined's photometric term). The measurements behind the defaults:
+// bench/results/registration.md ("Method defaults").
 struct PhotometricOptions : MethodOptionsBase<PhotometricOptions> {
   // IRLS weights of intensity residuals ([0, 1] units): DVO's Student-t (nu = t_dof) whose sigma photometric alone
   // re-estimates every iteration from t_sigma_rgb_init, floored at t_sigma_rgb_min; or Huber with k = huber_rgb.
