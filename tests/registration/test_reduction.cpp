@@ -289,6 +289,78 @@ TEST(Solver, NonFiniteOrZeroInputIsSafe) {
   EXPECT_EQ(z.xi.norm(), 0.0);
 }
 
+// The outcome rules a method that is not a per-pixel problem (NDT, sparse) reuses: the same statuses by the same
+// thresholds as the Gauss-Newton driver.
+TEST(Outcome, ClassifyOutcomeAppliesTheSharedRules) {
+  const GaussNewtonOptions o;
+  NormalEquations ne;
+  ne.JtJ = Matrix6d::Identity() * 100.0;
+  ne.cost = 2.0;
+  ne.count = 1000;
+  const GaussNewtonStep full = solve_gauss_newton_step(ne.JtJ, Vector6d::Zero(), o.degeneracy_threshold);
+  const SE3 T0;
+  const SE3 T = SE3::exp((Vector6d() << 0.0, 0.01, 0.0, 0.02, 0.0, 0.0).finished());
+  RegistrationResult r;
+  ASSERT_TRUE(classify_outcome(o, ne, full, 2000.0, T0, T, Vector6d::Zero(), r));
+  EXPECT_EQ(r.status, RegistrationStatus::good);
+  EXPECT_LT(test::translation_error_m(r.T_ref_cur, T), 1e-15);
+  EXPECT_DOUBLE_EQ(r.inlier_ratio, 0.5);
+  EXPECT_DOUBLE_EQ(r.final_cost, 0.002);
+  classify_outcome(o, ne, full, 1e4, T0, T, Vector6d::Zero(), r);  // 10 % of the possible rows
+  EXPECT_EQ(r.status, RegistrationStatus::poor);
+  GaussNewtonStep flat = full;
+  flat.degenerate_dims = 2;
+  classify_outcome(o, ne, flat, 2000.0, T0, T, Vector6d::Zero(), r);
+  EXPECT_EQ(r.status, RegistrationStatus::degenerate);
+  const SE3 far = SE3::exp((Vector6d() << 0.0, 0.0, 0.0, 0.6, 0.0, 0.0).finished());  // beyond max_translation_m
+  classify_outcome(o, ne, full, 2000.0, T0, far, Vector6d::Zero(), r);
+  EXPECT_EQ(r.status, RegistrationStatus::failed);
+  EXPECT_LT(test::translation_error_m(r.T_ref_cur, T0), 1e-15);  // never a wild pose
+  classify_outcome(o, ne, full, 2000.0, T0, T, Vector6d::Constant(0.01), r);  // still sliding
+  EXPECT_EQ(r.status, RegistrationStatus::failed);
+  ne.cost = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(classify_outcome(o, ne, full, 2000.0, T0, T, Vector6d::Zero(), r));
+  EXPECT_EQ(r.status, RegistrationStatus::failed);
+  test::expect_finite(r);
+}
+
+TEST(Outcome, LargeMotionsNeedTheReverseAlignmentToAgree) {
+  const GaussNewtonOptions o;
+  const SE3 T0;
+  const SE3 big = SE3::exp((Vector6d() << 0.0, 0.0, 0.0, 0.08, 0.0, 0.0).finished());  // > verify_motion_m
+  RegistrationResult r;
+  r.status = RegistrationStatus::good;
+  r.T_ref_cur = big;
+  int reverse_calls = 0;
+  auto reverse_agrees = [&](const SE3&) {
+    ++reverse_calls;
+    RegistrationResult rev;
+    rev.status = RegistrationStatus::good;
+    rev.T_ref_cur = big.inverse();
+    return rev;
+  };
+  verify_large_motion(o, T0, reverse_agrees, r);
+  EXPECT_EQ(r.status, RegistrationStatus::good);
+  EXPECT_EQ(reverse_calls, 1);
+  auto reverse_disagrees = [&](const SE3&) {
+    RegistrationResult rev;
+    rev.status = RegistrationStatus::good;
+    rev.T_ref_cur = SE3();
+    return rev;
+  };
+  verify_large_motion(o, T0, reverse_disagrees, r);
+  EXPECT_EQ(r.status, RegistrationStatus::failed);
+  EXPECT_LT(test::translation_error_m(r.T_ref_cur, T0), 1e-15);
+  // A small motion is not re-checked.
+  RegistrationResult small;
+  small.status = RegistrationStatus::good;
+  small.T_ref_cur = SE3::exp((Vector6d() << 0.0, 0.0, 0.0, 0.01, 0.0, 0.0).finished());
+  reverse_calls = 0;
+  verify_large_motion(o, T0, reverse_agrees, small);
+  EXPECT_EQ(reverse_calls, 0);
+  EXPECT_EQ(small.status, RegistrationStatus::good);
+}
+
 TEST(Registry, NamesAndErrors) {
   EXPECT_EQ(registration_names(), (std::vector<std::string>{"combined", "icp", "photometric"}));
   for (const std::string& name : registration_names()) {
