@@ -111,6 +111,7 @@ void write_tum_folder(const SyntheticSequence& seq, const std::string& dir_in, c
   // Everything is built in a fresh folder of our own making beside DIR, so nothing else is ever removed.
   std::string tmp;
   try {
+    if (const fs::path parent = fs::path(dir).parent_path(); !parent.empty()) fs::create_directories(parent, ec);
     tmp = make_private_folder_beside(dir);
   } catch (const Error&) {
     throw Error(dir + ": cannot create the output folder (is the parent a writable folder?)");

@@ -82,7 +82,7 @@ TEST(Pcd, ErrorsNameTheFile) {
     read_pcd(missing);
     FAIL();
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), missing + ": cannot open PCD file");
+    EXPECT_EQ(std::string(e.what()), missing + ": cannot read PCD file (No such file or directory)");
   }
   const std::string garbage = temp_path("garbage.pcd");
   const std::string head = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 3\nHEIGHT 1\n";

@@ -461,7 +461,7 @@ TEST(PlyRead, ErrorsFromFilesNameThePath) {
     read_ply_mesh(path);
     FAIL() << "expected hf::Error";
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), path + ": cannot open PLY file");
+    EXPECT_EQ(std::string(e.what()), path + ": cannot read PLY file (No such file or directory)");
   }
 }
 
