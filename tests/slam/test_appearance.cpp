@@ -25,7 +25,7 @@ datasets::SyntheticSequence room(std::uint64_t seed) {
   o.preset = "room";
   o.frames = kKeyframeStep * kKeyframes;
   o.seed = seed;
-  o.camera = PinholeCamera::preset("ros").scaled(1);  // 320x240: fast to render
+  o.camera = PinholeCamera::preset("ros").scaled(2);  // 160x120: fast to render, above every code's grid
   return datasets::SyntheticSequence(o);
 }
 
