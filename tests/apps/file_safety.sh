@@ -70,7 +70,7 @@ signals)  # 14.5: SIGTERM as SIGINT, a second signal cannot cut the writing shor
     pid=$!
     trap 'kill $pid 2>/dev/null' EXIT  # never leave a 100000-frame run behind
     for _ in $(seq 600); do grep -q "^registration:" "log_$sig" && break; sleep 0.1; done
-    sleep 1.5  # into the frame loop
+    sleep 3  # well into the frame loop (160x120 frames take milliseconds, tens under ASan)
     kill -s "$sig" $pid
     for _ in 1 2 3 4 5 6 7 8 9 10; do sleep 0.1; kill -s INT $pid 2>/dev/null; done  # impatient Ctrl-C while writing
     wait $pid
