@@ -43,13 +43,8 @@ VertexCurvatures discrete_curvature(const TriangleMesh& mesh, const MeshTopology
   const int n = topology.vertex_count;
   const std::vector<double> area = mixed_areas(mesh, topology);
 
-  std::vector<Eigen::Vector3d> mean_normal(n, Eigen::Vector3d::Zero());  // sum_j (cot a + cot b)(v_i - v_j)
-  for (const MeshEdge& e : topology.edges) {
-    const double w = edge_cotangent_weight(p, e);
-    const Eigen::Vector3d d = (p[e.v[0]] - p[e.v[1]]).cast<double>();
-    mean_normal[e.v[0]] += w * d;
-    mean_normal[e.v[1]] -= w * d;
-  }
+  // sum_j (cot a + cot b)(v_j - v_i); eq. 3 takes its length, so the sign convention does not matter here.
+  const std::vector<Eigen::Vector3d> mean_normal = cotangent_laplacian_sums(p, topology);
   std::vector<double> angle_sum(n, 0.0);
   std::vector<std::uint8_t> degenerate(mesh.triangles.size(), 0);
   for (int t : topology.degenerate_triangles) degenerate[t] = 1;

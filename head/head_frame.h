@@ -9,7 +9,8 @@
 //      and the offset as the mean of the midpoints), trimmed to the best 80 % of pairs; the start with the least
 //      residual wins. x is the plane's normal;
 //   3. the nose tip: among vertices within `band` of the plane, the one where the surface falls away from its
-//      tangent plane most in its least-falling direction, at scale rho = cap_scale x the surface's RMS radius
+//      tangent plane most in its least-falling direction, summed over the scales rho and rho / 2 with
+//      rho = cap_scale x the surface's RMS radius
 //      (a cap-likeness: the nose tip is a cap, a neck stump's cut, a bust's base and a crown's rim are ridges,
 //      the back of the head is a cap of much larger radius, an open border is excluded). y is the tip's normal
 //      (mean over rho / 2) projected into the plane;
@@ -38,7 +39,7 @@ struct HeadFrame {
   int nose_tip_vertex = -1;
   double mean_edge_length = 0.0;     // input units
   double symmetry_rms_edges = 0.0;   // trimmed RMS mirror residual, in mean edge lengths
-  double cap_score_edges = 0.0;      // the tip's cap score (head_frame.cpp) times the mean edge length
+  double cap_score_edges = 0.0;      // the tip's cap score (both scales, head_frame.cpp) x the mean edge length
   double cap_scale = 0.0;            // rho, input units
   double recession_above = 0.0, recession_below = 0.0;  // stage 4's mean recession, in mean edge lengths
   double width_above = 0.0, width_below = 0.0;          // stage 4's head widths, in mean edge lengths

@@ -7,13 +7,7 @@ namespace hf::head {
 LaplaceBeltrami laplace_beltrami(const TriangleMesh& mesh, const MeshTopology& topology) {
   const std::vector<Eigen::Vector3f>& p = mesh.vertices;
   const int n = topology.vertex_count;
-  std::vector<Eigen::Vector3d> sum(n, Eigen::Vector3d::Zero());
-  for (const MeshEdge& e : topology.edges) {
-    const double w = 0.5 * edge_cotangent_weight(p, e);
-    const Eigen::Vector3d d = (p[e.v[1]] - p[e.v[0]]).cast<double>();
-    sum[e.v[0]] += w * d;
-    sum[e.v[1]] -= w * d;
-  }
+  const std::vector<Eigen::Vector3d> sum = cotangent_laplacian_sums(p, topology);  // 2 x sum_j w_ij (v_j - v_i)
   std::vector<double> S(n, 0.0);
   std::vector<std::uint8_t> degenerate(mesh.triangles.size(), 0);
   for (int t : topology.degenerate_triangles) degenerate[t] = 1;
@@ -28,7 +22,7 @@ LaplaceBeltrami laplace_beltrami(const TriangleMesh& mesh, const MeshTopology& t
   out.valid.assign(n, 0);
   for (int i = 0; i < n; ++i) {
     if (!topology.is_interior(i) || !(S[i] > 0.0)) continue;
-    const Eigen::Vector3d delta = sum[i] / (S[i] / 3.0);
+    const Eigen::Vector3d delta = 0.5 * sum[i] / (S[i] / 3.0);
     const Eigen::Vector3f d = delta.cast<float>();
     const float m = static_cast<float>(delta.norm());
     if (!d.allFinite() || !std::isfinite(m)) continue;

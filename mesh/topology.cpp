@@ -146,4 +146,16 @@ double edge_cotangent_weight(const std::vector<Eigen::Vector3f>& p, const MeshEd
   return w;
 }
 
+std::vector<Eigen::Vector3d> cotangent_laplacian_sums(const std::vector<Eigen::Vector3f>& p,
+                                                      const MeshTopology& topology) {
+  std::vector<Eigen::Vector3d> sum(topology.vertex_count, Eigen::Vector3d::Zero());
+  for (const MeshEdge& e : topology.edges) {
+    const double w = edge_cotangent_weight(p, e);
+    const Eigen::Vector3d d = (p[e.v[1]] - p[e.v[0]]).cast<double>();
+    sum[e.v[0]] += w * d;
+    sum[e.v[1]] -= w * d;
+  }
+  return sum;
+}
+
 }  // namespace hf

@@ -66,5 +66,10 @@ double corner_angle(const std::vector<Eigen::Vector3f>& positions, int apex, int
 double triangle_area(const std::vector<Eigen::Vector3f>& positions, const Eigen::Vector3i& t);
 // cot(alpha) + cot(beta) of an edge's two opposite corners; a boundary edge contributes its one side.
 double edge_cotangent_weight(const std::vector<Eigen::Vector3f>& positions, const MeshEdge& e);
+// The cotangent Laplacian's sum at every vertex, sum_j (cot alpha_ij + cot beta_ij) (v_j - v_i), in double: the
+// mean-curvature normal of Meyer et al. is -1/(2 A) of it, the Laplace-Beltrami operator of Nealen et al. half of
+// it over an area.
+std::vector<Eigen::Vector3d> cotangent_laplacian_sums(const std::vector<Eigen::Vector3f>& positions,
+                                                      const MeshTopology& topology);
 
 }  // namespace hf
