@@ -3,7 +3,7 @@
 #   bash file_safety.sh HASHFUSION SCRATCH_DIR CASE
 # One CASE per defect of the issue (CTest runs each as its own test); each prints why it failed and exits 1.
 set -u
-HF=$1
+HF=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")  # absolute: the cases cd into their scratch folder
 ROOT=$2/file_safety_$3
 CASE=$3
 rm -rf "$ROOT" && mkdir -p "$ROOT" && cd "$ROOT" || exit 1
