@@ -6,7 +6,7 @@ set -u
 HF=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")  # absolute: the cases cd into their scratch folder
 ROOT=$2/file_safety_$3
 CASE=$3
-rm -rf "$ROOT" && mkdir -p "$ROOT" && cd "$ROOT" || exit 1
+rm -rf "$ROOT" && mkdir -p "$ROOT" && cd "$ROOT" && ROOT=$(pwd) || exit 1
 fail() { echo "FAIL ($CASE): $*" >&2; exit 1; }
 # A 160x120 camera keeps every run short, under ASan too.
 printf 'fx 131.25\nfy 131.25\ncx 79.5\ncy 59.5\nwidth 160\nheight 120\n' > cam.txt
