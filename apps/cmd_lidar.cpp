@@ -134,6 +134,14 @@ void run_lidar(LidarArgs a) {
     return;
   }
 
+  // Footprints first: a bad footprint file should fail before the points are read.
+  std::optional<lidar::Mask> truth, coverage;
+  if (!a.footprints.empty()) {
+    const auto polygons = lidar::read_footprints(a.footprints, a.footprint_layer, &grid);
+    truth = lidar::rasterise_footprints(polygons, grid), coverage = lidar::rasterise_coverage(polygons, grid);
+  } else if (scene) {
+    truth = scene->footprints;
+  }
   const lidar::CellRaster raster = lidar::rasterise_files(a.inputs, grid, o.classes, true);
   lidar::BuiltUp b = lidar::classify_built_up(raster, o);
   const std::optional<Image<std::uint8_t>> class_truth = scene ? std::optional(scene->classes) : std::nullopt;
@@ -147,13 +155,6 @@ void run_lidar(LidarArgs a) {
     lidar::reclassify(b, o.t_s, o.areas, o.cell_m);
   }
   if (class_truth) report.validation = lidar::compare_classes(b.profile.classes, *class_truth);
-  std::optional<lidar::Mask> truth, coverage;
-  if (!a.footprints.empty()) {
-    const auto polygons = lidar::read_footprints(a.footprints, a.footprint_layer, &grid);
-    truth = lidar::rasterise_footprints(polygons, grid), coverage = lidar::rasterise_coverage(polygons, grid);
-  } else if (scene) {
-    truth = scene->footprints;
-  }
   const lidar::BuiltUpRaster result = lidar::built_up_raster(b, grid);
   write_outputs(a, report, result, truth ? &*truth : nullptr, coverage ? &*coverage : nullptr);
 }

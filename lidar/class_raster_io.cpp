@@ -9,6 +9,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "io/image_io.h"
+#include "lidar/gdal_errors.h"
 
 namespace hf::lidar {
 
@@ -53,10 +54,11 @@ void write_class_geotiff(const std::string& path, const Image<std::uint8_t>& cla
   GDALAllRegister();
   GDALDriverH driver = GDALGetDriverByName("GTiff");
   if (!driver) throw Error(path + ": GDAL has no GTiff driver");
+  const QuietGdal quiet;
   write_path_atomically(path, [&](const std::string& tmp) {
     char* options[] = {const_cast<char*>("COMPRESS=DEFLATE"), nullptr};
     GDALDatasetH ds = GDALCreate(driver, tmp.c_str(), classes.width(), classes.height(), 1, GDT_Byte, options);
-    if (!ds) throw Error(path + ": GDAL cannot create it: " + CPLGetLastErrorMsg());
+    if (!ds) throw Error(path + ": GDAL cannot create it" + QuietGdal::why(""));
     double transform[6] = {grid.west(), grid.cell_m, 0, grid.north(), 0, -grid.cell_m};
     GDALSetGeoTransform(ds, transform);
     if (epsg > 0) {
@@ -81,7 +83,7 @@ void write_class_geotiff(const std::string& path, const Image<std::uint8_t>& cla
     const CPLErr err = GDALRasterIO(band, GF_Write, 0, 0, classes.width(), classes.height(), const_cast<std::uint8_t*>(classes.data()),
                                     classes.width(), classes.height(), GDT_Byte, 0, 0);
     GDALClose(ds);
-    if (err != CE_None) throw Error(path + ": GDAL failed to write the raster: " + CPLGetLastErrorMsg());
+    if (err != CE_None) throw Error(path + ": GDAL failed to write the raster" + QuietGdal::why(""));
   });
 }
 

@@ -4,10 +4,12 @@
 #include <ogr_api.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <cmath>
 #include <memory>
 
 #include "core/error.h"
+#include "lidar/gdal_errors.h"
 
 namespace hf::lidar {
 namespace {
@@ -26,10 +28,12 @@ void add_polygon(OGRGeometryH geometry, std::vector<Polygon>& out) {
 }  // namespace
 
 std::vector<Polygon> read_footprints(const std::string& path, const std::string& layer_name, const Grid* extent, int* skipped) {
+  if (!std::filesystem::exists(path)) throw Error(path + ": footprint file does not exist");
   GDALAllRegister();
+  const QuietGdal quiet;
   const std::unique_ptr<void, void (*)(GDALDatasetH)> ds(
       GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr), [](GDALDatasetH h) { GDALClose(h); });
-  if (!ds) throw Error(path + ": GDAL cannot open it as vector data: " + CPLGetLastErrorMsg());
+  if (!ds) throw Error(path + ": GDAL cannot open it as vector data" + QuietGdal::why(" (no vector driver recognises it)"));
   OGRLayerH layer = layer_name.empty() ? GDALDatasetGetLayer(ds.get(), 0) : GDALDatasetGetLayerByName(ds.get(), layer_name.c_str());
   if (!layer) throw Error(path + ": no layer " + (layer_name.empty() ? std::string("at all") : "'" + layer_name + "'"));
   if (extent)

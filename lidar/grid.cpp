@@ -33,8 +33,19 @@ Grid grid_over(double min_x, double min_y, double max_x, double max_y, double ce
   return g;
 }
 
+namespace {
+// About 30 bytes per cell: 4e8 cells is 12 GB, beyond which a run should be tiled rather than die in new.
+const Grid& checked(const Grid& g) {
+  if (g.width <= 0 || g.height <= 0) throw Error("grid: empty");
+  if (double(g.width) * g.height > 4e8)
+    throw Error("grid: " + std::to_string(g.width) + " x " + std::to_string(g.height) +
+                " cells need more than 12 GB; run it tiled (--tiles) or with a larger --cell-m");
+  return g;
+}
+}  // namespace
+
 CellRaster::CellRaster(const Grid& g)
-    : grid(g),
+    : grid(checked(g)),
       building(g.width, g.height, 0),
       building_top_z(g.width, g.height, 0.0f),
       ground_sum_mm(g.width, g.height, 0),

@@ -59,7 +59,7 @@ struct CellRaster {
   std::uint64_t points = 0;         // points that fell in the grid
 
   CellRaster() = default;
-  explicit CellRaster(const Grid& g);
+  explicit CellRaster(const Grid& g);  // throws hf::Error beyond 4e8 cells (about 12 GB): tile such inputs
   void add(const std::vector<LasPoint>& points, const PointClasses& classes = {});
 };
 

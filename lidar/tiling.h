@@ -10,6 +10,10 @@
 // tile checks its assumptions and throws hf::Error rather than return a wrong answer: a building taller than
 // max_height_m, or one near the core that is not seen whole with its ground box.
 //
+// Limit: the merge holds the whole grid's labels and rasters in memory (about 20 bytes per cell, 8 GB for 20 x
+// 20 km at 0.5 m); a country needs the merge done band by band (union-find over the border rows only), not
+// done yet.
+//
 // Tile files are binary (magic "HFLTILE1", host byte order with a byte-order mark; written atomically); reading
 // checks every size and label and throws hf::Error naming the file and byte offset.
 #pragma once

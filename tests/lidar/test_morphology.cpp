@@ -45,6 +45,12 @@ Image<float> random_radii(const Mask& m, std::uint64_t seed, float max_r) {
   return out;
 }
 
+Mask union_of(const Mask& a, const Mask& b) {
+  Mask u = a;
+  for (size_t i = 0; i < u.size(); ++i) u.pixels()[i] |= b.pixels()[i];
+  return u;
+}
+
 bool subset(const Mask& a, const Mask& b) {
   for (size_t i = 0; i < a.size(); ++i)
     if (a.pixels()[i] && !b.pixels()[i]) return false;
@@ -85,9 +91,7 @@ TEST(VariantDilation, EqualsTheUnionOfDiscs) {
 TEST(VariantDilation, ExtensiveAndIncreasing) {
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     const Mask small = random_blocks(64, 64, 10, seed);
-    Mask big = small;
-    const Mask extra = random_blocks(64, 64, 6, seed + 50);
-    for (size_t i = 0; i < big.size(); ++i) big.pixels()[i] |= extra.pixels()[i];
+    const Mask big = union_of(small, random_blocks(64, 64, 6, seed + 50));
     const Image<float> r = random_radii(big, seed, 5.0f);
     const Mask ds = variant_dilation(small, r), db = variant_dilation(big, r);
     EXPECT_TRUE(subset(small, ds));
@@ -101,9 +105,7 @@ TEST(VariantDilation, ExtensiveAndIncreasing) {
 TEST(AreaOpening, AntiExtensiveIncreasingIdempotent) {
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     const Mask x = random_mask(60, 50, 0.45, seed);
-    Mask y = x;
-    const Mask more = random_mask(60, 50, 0.1, seed + 9);
-    for (size_t i = 0; i < y.size(); ++i) y.pixels()[i] |= more.pixels()[i];
+    const Mask y = union_of(x, random_mask(60, 50, 0.1, seed + 9));
     for (double a : {1.0, 4.0, 20.0, 300.0}) {
       const Mask ox = area_opening(x, a, 1.0);
       EXPECT_TRUE(subset(ox, x));
