@@ -94,7 +94,8 @@ TileResult run_tile_on(const CellRaster& raster, const TilePlan& plan, int tile,
 
   // The halo's assumptions, for every building whose disc could reach the core.
   const int r_max = ceil_cells(o.t_s * limits.max_height_m, o.cell_m) + 1;
-  const int margin = ceil_cells(o.heights.ground_margin_m, o.cell_m);
+  // At least one cell, so that a building cut by the window's edge is caught even without a ground margin.
+  const int margin = std::max(1, ceil_cells(o.heights.ground_margin_m, o.cell_m));
   const int cx0 = core.col - win.col, cy0 = core.row - win.row, cx1 = cx0 + core.width - 1, cy1 = cy0 + core.height - 1;
   for (int id = 0; id < b.buildings.count; ++id) {
     const int x0 = b.buildings.min_col[id], x1 = b.buildings.max_col[id], y0 = b.buildings.min_row[id], y1 = b.buildings.max_row[id];

@@ -113,6 +113,29 @@ TEST(Tiling, UnmetHaloAssumptionsAreReported) {
   } catch (const hf::Error& e) {
     EXPECT_NE(std::string(e.what()).find("above --max-height-m"), std::string::npos) << e.what();
   }
+  // A 100-cell-wide building across a tile border with a 20 m limit: its tile cannot see it whole.
+  Grid grid{1.0, 0, 50, 300, 50};
+  std::vector<LasPoint> pts;
+  for (int row = 0; row < grid.height; ++row)
+    for (int col = 0; col < grid.width; ++col) {
+      LasPoint p;
+      p.x = col + 0.5, p.y = grid.row0 - 1 - row + 0.5;
+      const bool roof = col >= 100 && col < 200 && row >= 20 && row < 30;
+      p.z = roof ? 6.0 : 0.0;
+      p.classification = roof ? 6 : 2;
+      pts.push_back(p);
+    }
+  const TileLimits narrow{10.0, 20.0};
+  const TilePlan three = plan_tiles(grid, 3, 1, o, narrow);
+  const CellRect w = three.window(0);
+  CellRaster raster(grid.window(w.col, w.row, w.width, w.height));
+  raster.add(pts);
+  try {
+    run_tile_on(raster, three, 0, o, narrow);
+    FAIL() << "no error";
+  } catch (const hf::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("is not seen whole with its ground"), std::string::npos) << e.what();
+  }
   EXPECT_THROW(plan_tiles(scene.grid, 0, 1, o), hf::Error);
 }
 
