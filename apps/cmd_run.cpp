@@ -35,6 +35,7 @@ struct RunOptions {
   size_t capacity_blocks = 0;  // 0: the configuration's
   int synthetic_frames = 90;
   std::uint64_t seed = 0;
+  bool global = false;  // --global: final pose-graph optimisation over all keyframes and re-fusion
 };
 
 std::unique_ptr<FrameSource> open_input(const RunOptions& o) {
@@ -91,6 +92,7 @@ void run(const RunOptions& o, const CLI::App& cmd) {
   control.max_frames = o.max_frames;
   control.stop = guard.flag();
   control.progress_label = "run";
+  control.global = o.global;
   const slam::SequenceRun result = slam::run_sequence(*source, pipeline, control);
   if (result.frames.empty()) {
     guard.exit_if_interrupted("before the first frame, nothing written");
@@ -109,7 +111,11 @@ void run(const RunOptions& o, const CLI::App& cmd) {
   for (const auto& p : written) std::cout << "  " << std::filesystem::absolute(p).string() << "\n";
   std::cout << "frames: " << summary.frames << " (" << summary.frames_lost << " lost, " << summary.frames_bad
             << " unreadable), " << summary.fps << " fps\n";
-  if (const auto ate = summary.ate_rmse_m()) std::cout << "ATE RMSE: " << *ate << " m\n";
+  if (const auto ate = summary.ate_rmse_m()) {
+    std::cout << "ATE RMSE: " << *ate << " m" << (o.global ? " (after --global)" : "");
+    if (summary.ate_online_m) std::cout << ", online " << *summary.ate_online_m << " m";
+    std::cout << "\n";
+  }
   const std::string done = "outputs written for " + std::to_string(summary.frames) + " of " +
                            std::to_string(source->size()) + " frames";
   guard.exit_if_interrupted(done);
@@ -135,6 +141,9 @@ void add_run_command(CLI::App& app) {
                   "pyramid level tracking starts at (0 full, 1 half, 2 quarter resolution); default: the configuration's")
       ->check(CLI::Range(0, 2));
   cmd->add_option("--camera", opts->camera, "camera preset name or camera file (default: chosen per dataset)");
+  cmd->add_flag("--global", opts->global,
+               "after the last frame: optimise the keyframe pose graph once more and fuse the map anew from the "
+               "corrected poses (report.json holds the online and the final trajectory's ATE)");
   cmd->add_option("--config", opts->config_file, "JSON pipeline configuration (report.json's \"config\" form)");
   cmd->add_option("--capacity-blocks", opts->capacity_blocks,
                   "voxel block pool size, 4 KiB per block (default: the configuration's, 131072 = 512 MiB)")

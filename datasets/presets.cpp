@@ -201,12 +201,40 @@ Preset make_sphere() {
   return p;
 }
 
+// One lap looking outwards from near the room's middle, back to the start pose after kLoopFrames: each wall is
+// seen once per lap, so tracking can only drift until the camera sees the first walls again (a loop to close).
+constexpr int kLoopFrames = 240;  // 8 s a lap at 30 Hz: 1.5 degrees and ~1.3 cm per frame
+
+Preset make_loop() {
+  Preset p = room_preset("loop", false);
+  p.description = "one outward-looking lap of the room every 240 frames, back to the start: drift to close";
+  p.T_world_camera = [](int i) {
+    const double phi = 0.3 + 2.0 * kPi * double(i) / kLoopFrames;
+    const Vector3d dir(std::cos(phi), std::sin(phi), 0.0);
+    const Vector3d eye = Vector3d(0.1, -0.1, 1.4) + 0.5 * dir;
+    return look_at(eye, eye + dir - Vector3d(0, 0, std::tan(25.0 * kPi / 180.0)));
+  };
+  return p;
+}
+
+// The room's orbit until kKidnapFrame, then the camera is carried back to where frame 0 was (0.7 m and ~30 degrees
+// away) and the orbit goes on from there: relocalisation must find the mapped view.
+constexpr int kKidnapFrame = 75;
+
+Preset make_kidnap() {
+  Preset p = room_preset("kidnap", false);
+  p.description = "the room's orbit, then at frame 75 a jump back to frame 0's viewpoint: relocalisation";
+  p.T_world_camera = [](int i) { return room_trajectory(i < kKidnapFrame ? i : i - kKidnapFrame); };
+  return p;
+}
+
 using Factory = Preset (*)();
 const std::map<std::string, Factory>& factories() {
   static const std::map<std::string, Factory> table = {
       {"room", make_room},       {"wall", make_wall},   {"corridor", make_corridor},
       {"textureless", make_textureless}, {"fast", make_fast},   {"holes", make_holes},
-      {"exposure", make_exposure},       {"sphere", make_sphere},
+      {"exposure", make_exposure},       {"sphere", make_sphere}, {"loop", make_loop},
+      {"kidnap", make_kidnap},
   };
   return table;
 }

@@ -15,6 +15,11 @@
 //   holes        the room with 30% of the depth missing in blobs (on top of the usual sensor dropouts).
 //   exposure     the room with a global colour gain changing between frames (0.6 .. 1.4): brightness constancy
 //                is violated, as with auto-exposure.
+//   loop         the room seen by a camera looking outwards from near its middle, one lap every 240 frames and
+//                back to the start pose: tracking drifts over the lap, and the first walls come back into view
+//                (loop closure).
+//   kidnap       the room's orbit until frame 75, then the camera jumps back to frame 0's viewpoint (~0.7 m and
+//                30 degrees away) and goes on: tracking cannot follow; relocalisation must find the mapped view.
 //   sphere       a single textured sphere (radius 0.5 m at the origin) seen from a ring around it: fusion tests
 //                compare the reconstruction with the analytic surface (see sphere_centre/radius below).
 //

@@ -37,13 +37,29 @@ struct KeyframeOptions {
   void validate() const;  // hf::Error naming the bad field
 };
 
+// One RGB-D frame compressed in memory: depth as a 16-bit PNG in 1/5000 m units, colour as a JPEG (lossy; empty
+// when the frame had none). What keyframes and the re-integration store (slam/reintegration.h) keep.
+struct CompressedRgbd {
+  std::vector<std::uint8_t> depth_png, colour_jpg;
+
+  static CompressedRgbd encode(const DepthImage& depth, const ColorImage& colour, int jpeg_quality);
+  DepthImage depth() const;   // hf::Error for corrupt data; empty image when none is stored
+  ColorImage colour() const;  // likewise
+  size_t bytes() const { return depth_png.size() + colour_jpg.size(); }
+  bool empty() const { return depth_png.empty(); }
+  void clear();
+};
+
 struct Keyframe {
   size_t id = 0;            // index in the map, in order of creation
   size_t frame_index = 0;   // the frame it was made from
   double timestamp_s = 0.0;
   SE3 T_world_camera;       // its pose (corrected by loop closure)
+  // Its pose relative to the previous keyframe as tracked (identity for the first): the odometry measurement the
+  // pose graph keeps while loop closures move both ends.
+  SE3 T_previous_this;
   Matrix6d information = Matrix6d::Zero();  // of the registration that placed it (zero for the first)
-  std::vector<std::uint8_t> depth_png, colour_jpg;  // empty once dropped for the budget
+  CompressedRgbd images;    // empty once dropped for the budget
 };
 
 class KeyframeMap {
@@ -62,7 +78,7 @@ class KeyframeMap {
   void set_pose(size_t id, const SE3& T_world_camera) { keyframes_.at(id).T_world_camera = T_world_camera; }
   const std::vector<Keyframe>& all() const { return keyframes_; }
 
-  bool has_images(size_t id) const { return !keyframes_.at(id).depth_png.empty(); }
+  bool has_images(size_t id) const { return !keyframes_.at(id).images.empty(); }
   // Decoded images (metres; 0 = no depth). Empty images when has_images(id) is false.
   DepthImage depth(size_t id) const;
   ColorImage colour(size_t id) const;

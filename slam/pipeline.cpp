@@ -98,7 +98,7 @@ struct Pipeline::Verdict {
 Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
     : config_(config), camera_(camera), tracking_camera_(camera.scaled(config.tracking_level)),
       grid_((config.validate(), config.volume)),
-      reference_(std::make_unique<Reference>()), keyframes_(config.keyframes) {
+      reference_(std::make_unique<Reference>()), keyframes_(config.keyframes), fused_(config.reintegration) {
   if (config_.registration == "groundtruth") return;
   RegistrationOptions options = effective_registration_options(config_);
   std::vector<int>& iterations = options.driver.iterations;
@@ -134,20 +134,22 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
   if (!registration_) {  // groundtruth: fusion only
     if (!frame.T_world_camera_gt) {
       lose(&r, "no ground-truth pose for this frame");
-      return r;
+    } else {
+      r.state = TrackState::groundtruth;
+      r.T_world_camera = *frame.T_world_camera_gt;
+      r.pose_valid = true;
+      integrate(frame, r.T_world_camera, &r);
+      T_world_cur_ = r.T_world_camera;
+      last_time_s_ = frame.timestamp_s;
     }
-    r.state = TrackState::groundtruth;
-    r.T_world_camera = *frame.T_world_camera_gt;
-    r.pose_valid = true;
-    integrate(frame, r.T_world_camera, &r);
-    T_world_cur_ = r.T_world_camera;
-    last_time_s_ = frame.timestamp_s;
+    record_anchor(r);
     return r;
   }
 
   FramePyramid current = preprocess(frame, &r);
   if (!T_world_cur_ || !reference_->valid) {
     initialise(frame, current, &r);
+    record_anchor(r);
     return r;
   }
   Verdict v = track(current, frame.timestamp_s, &r);
@@ -157,6 +159,8 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
   if (v.action == Verdict::lose) {
     r.registration = std::move(v.registration);
     lose(&r, v.why);
+    reintegrate(&r);
+    record_anchor(r);
     return r;
   }
   // The verdict is final: apply it.
@@ -176,7 +180,16 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
   T_world_cur_ = v.T_world_cur;
   last_time_s_ = frame.timestamp_s;
   lost_spell_ = 0;
-  if (r.integrated) add_keyframe_if_due(frame, &r);
+  if (r.integrated) {
+    add_keyframe_if_due(frame, &r);
+    if (config_.reintegration.enabled) {
+      const size_t k = keyframes_.size() - 1;
+      fused_.add(frame.index, k, keyframes_[k].T_world_camera, r.T_world_camera, frame.depth, frame.color);
+    }
+  }
+  if (r.keyframe) close_loops(frame, &r);
+  reintegrate(&r);
+  record_anchor(r);
   return r;
 }
 
@@ -209,6 +222,10 @@ void Pipeline::initialise(const RgbdFrame& frame, FramePyramid& current, FrameRe
   velocity_ = SE3();
   lost_spell_ = 0;
   add_keyframe_if_due(frame, r);
+  if (config_.reintegration.enabled && !keyframes_.empty()) {
+    const size_t k = keyframes_.size() - 1;
+    fused_.add(frame.index, k, keyframes_[k].T_world_camera, T0, frame.depth, frame.color);
+  }
 }
 
 Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_s, FrameResult* r) {
@@ -337,6 +354,107 @@ void Pipeline::integrate(const RgbdFrame& frame, const SE3& T_world_cur, FrameRe
     fusion::stream_out(grid_, store_, T_world_cur.translation(), config_.stream_radius_m);
   r->ms.integrate = ms_since(t0);
   r->integrated = true;
+}
+
+// The frame is kept for re-fusion, anchored to the newest keyframe (itself when it just became one).
+void Pipeline::record_anchor(const FrameResult& r) {
+  if (keyframes_.empty()) {
+    anchors_.push_back({std::string::npos, r.T_world_camera});
+    return;
+  }
+  const size_t k = keyframes_.size() - 1;
+  anchors_.push_back({k, keyframes_[k].T_world_camera.inverse() * r.T_world_camera});
+}
+
+std::vector<SE3> Pipeline::corrected_trajectory() const {
+  std::vector<SE3> out;
+  out.reserve(anchors_.size());
+  for (const Anchor& a : anchors_)
+    out.push_back(a.keyframe == std::string::npos ? a.T_keyframe_frame
+                                                  : keyframes_[a.keyframe].T_world_camera * a.T_keyframe_frame);
+  return out;
+}
+
+// Registers the new keyframe against its loop candidates from the relative pose their current poses imply; the
+// first verified one becomes a loop edge and the graph is solved.
+void Pipeline::close_loops(const RgbdFrame& frame, FrameResult* r) {
+  if (!config_.loop_closure.enabled || !appearance_ || keyframes_.size() < 2) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  const LoopClosureOptions& lo = config_.loop_closure;
+  const size_t k = keyframes_.size() - 1;
+  const std::vector<AppearanceMatch> matches =
+      appearance_->query(frame.color, frame.depth, size_t(lo.candidates + lo.min_keyframe_gap) * 2);
+  const std::vector<size_t> candidates = loop_candidates(keyframes_, k, matches, lo);
+  if (candidates.empty()) return;
+  // The primary method: keyframe pairs often see one wall and a floor, which leaves ICP alone degenerate.
+  Registration& verifier = *registration_;
+  FramePyramidOptions po = config_.pyramid;
+  po.first_level = config_.tracking_level;
+  const FramePyramid kp = build_frame_pyramid(frame.depth, frame.color.empty() ? nullptr : &frame.color, camera_, po);
+  bool added = false;
+  for (size_t c : candidates) {
+    const DepthImage cd = keyframes_.depth(c);
+    const ColorImage cc = keyframes_.colour(c);
+    const FramePyramid cp = build_frame_pyramid(cd, cc.empty() ? nullptr : &cc, camera_, po);
+    const SE3 guess = keyframes_[c].T_world_camera.inverse() * keyframes_[k].T_world_camera;
+    const RegistrationResult reg = verifier.align(kp, cp, guess);
+    if (reg.status != RegistrationStatus::good || reg.inlier_ratio < lo.min_inlier_ratio) continue;
+    const Consistency cons = depth_consistency(kp.levels[0].vertices, depth_of(cp.levels[0].vertices),
+                                               tracking_camera_, reg.T_ref_cur, config_.volume.voxel_m);
+    if (cons.overlap == 0 || double(cons.consistent) < lo.min_consistent * double(cons.overlap)) continue;
+    loops_.push_back({c, k, reg.T_ref_cur, reg.information});
+    added = true;
+    break;
+  }
+  if (added && apply_graph(lo.graph)) {
+    r->loop_closed = true;
+    ++loops_closed_;
+    // The tracking reference keeps its maps (camera frame) and moves with the current keyframe.
+    const SE3 T_new = keyframes_[k].T_world_camera;
+    T_world_cur_ = T_new;
+    reference_->T_world_model = T_new;
+    if (config_.reintegration.enabled) fused_.schedule(keyframes_);
+  }
+  r->ms.loop = ms_since(t0);
+}
+
+// Solves the keyframe graph; on success every keyframe takes its solution. False when the solve failed or the
+// newest loop was rejected by the graph's consistency test (it is then dropped).
+bool Pipeline::apply_graph(const PoseGraphOptions& options) {
+  const PoseGraph g = keyframe_graph(keyframes_, loops_);
+  const PoseGraphResult res = g.optimize(options);
+  if (!res.ok()) return false;
+  if (!loops_.empty() && !res.loop_accepted.empty() && !res.loop_accepted.back()) {
+    loops_.pop_back();
+    return false;
+  }
+  for (size_t i = 0; i < keyframes_.size() && i < res.T_world_node.size(); ++i)
+    keyframes_.set_pose(i, res.T_world_node[i]);
+  return true;
+}
+
+void Pipeline::reintegrate(FrameResult* r) {
+  if (!config_.reintegration.enabled || fused_.pending() == 0) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  r->reintegrated = fused_.step(size_t(config_.reintegration.frames_per_step), keyframes_, grid_, camera_,
+                                config_.integrate, &store_);
+  r->ms.reintegrate = ms_since(t0);
+}
+
+double Pipeline::finish(bool global) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!registration_) return 0.0;
+  if (global && keyframes_.size() > 1) {
+    PoseGraphOptions o = config_.loop_closure.graph;
+    o.time_budget_ms = std::max(o.time_budget_ms, 10000.0);
+    o.max_iterations = std::max(o.max_iterations, 500);
+    apply_graph(o);
+    if (config_.reintegration.enabled) fused_.refuse_all(keyframes_, grid_, camera_, config_.integrate, &store_);
+  } else if (config_.reintegration.enabled) {
+    fused_.schedule(keyframes_);
+    fused_.step(fused_.pending(), keyframes_, grid_, camera_, config_.integrate, &store_);
+  }
+  return ms_since(t0);
 }
 
 // The model maps at the new pose become the reference, with this frame's intensity as the photometric reference.

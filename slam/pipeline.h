@@ -20,6 +20,18 @@
 //   raycast      the model maps at the new pose: the next frame's reference.
 //   keyframe     a tracked, integrated frame that moved far enough from the last keyframe becomes one
 //                (slam/keyframes.h) and is added to the appearance index.
+//   close_loops  for a new keyframe: loop candidates by appearance and pose proximity, verified by registration
+//                (icp from the poses' relative guess, then inlier ratio and depth agreement); a verified loop
+//                joins the keyframe pose graph, which Ceres solves within loop_closure.time_budget_ms
+//                (slam/loop_closure.h, slam/pose_graph.h); the keyframes take the solution, the current pose with
+//                them, and every fused frame whose anchored pose moved is queued for re-fusion.
+//   reintegrate  up to reintegration.frames_per_step queued frames, most-changed first, are taken out of the
+//                map at the pose they were fused at and fused again at their corrected one (slam/reintegration.h).
+//
+// Poses: FrameResult::T_world_camera is the ONLINE estimate, the pose known when the frame was processed.
+// corrected_trajectory() gives every processed frame's pose after the loop closures so far (each frame moves with
+// the keyframe it was tracked from); finish() drains the re-fusion queue, finish(true) (`--global`) solves the
+// whole graph once more and fuses the map anew from the final poses.
 //
 // Failure policy (it lives here, not in registration). A registration is PLAUSIBLE when it is usable, degenerate
 // in at most max_degenerate_dims directions and implies a motion below max_speed_m_per_s /
@@ -62,7 +74,9 @@
 #include "registration/registration.h"
 #include "slam/appearance.h"
 #include "slam/keyframes.h"
+#include "slam/loop_closure.h"
 #include "slam/pipeline_config.h"
+#include "slam/reintegration.h"
 
 namespace hf::slam {
 
@@ -79,8 +93,11 @@ const char* to_string(TrackState state);
 
 // Milliseconds per stage for one frame (0 for stages that did not run).
 struct StageMs {
-  double read = 0, preprocess = 0, track = 0, relocalise = 0, integrate = 0, raycast = 0, keyframe = 0;
-  double total() const { return read + preprocess + track + relocalise + integrate + raycast + keyframe; }
+  double read = 0, preprocess = 0, track = 0, relocalise = 0, integrate = 0, raycast = 0, keyframe = 0, loop = 0,
+         reintegrate = 0;
+  double total() const {
+    return read + preprocess + track + relocalise + integrate + raycast + keyframe + loop + reintegrate;
+  }
 };
 
 struct FrameResult {
@@ -91,6 +108,8 @@ struct FrameResult {
   bool pose_valid = false;   // false while lost (and for groundtruth frames without ground truth)
   bool integrated = false;
   bool keyframe = false;     // the frame became a keyframe
+  bool loop_closed = false;  // a verified loop at this keyframe moved the keyframes
+  size_t reintegrated = 0;   // earlier frames re-fused at their corrected poses during this frame
   std::string method;        // the registration that placed the frame (primary, fallback, or "relocalisation")
   std::optional<RegistrationResult> registration;  // the one that placed (or failed to place) the frame
   std::string message;       // why the frame was lost (one line), empty otherwise
@@ -117,6 +136,15 @@ class Pipeline {
   size_t frames_lost() const { return lost_; }
   std::optional<SE3> last_good_pose() const { return T_world_cur_; }
   const KeyframeMap& keyframes() const { return keyframes_; }
+  const std::vector<LoopEdge>& loops() const { return loops_; }
+  size_t loops_closed() const { return loops_closed_; }
+  const FusedFrames& fused_frames() const { return fused_; }
+
+  // Every processed frame's pose after the loop closures so far, in processing order.
+  std::vector<SE3> corrected_trajectory() const;
+  // After the last frame: re-fuses every queued frame; with `global`, first solves the keyframe graph once more
+  // (a longer budget) and then fuses the map anew from every stored frame at its final pose. Returns the ms taken.
+  double finish(bool global = false);
 
   // The whole map (resident and streamed-out blocks) as a welded, coloured mesh.
   TriangleMesh extract_mesh() const;
@@ -135,6 +163,10 @@ class Pipeline {
   void integrate(const RgbdFrame& frame, const SE3& T_world_cur, FrameResult* r);
   void raycast_reference(FramePyramid& current, const SE3& T_world_cur, bool integrated, FrameResult* r);
   void add_keyframe_if_due(const RgbdFrame& frame, FrameResult* r);
+  void close_loops(const RgbdFrame& frame, FrameResult* r);
+  bool apply_graph(const PoseGraphOptions& options);
+  void reintegrate(FrameResult* r);
+  void record_anchor(const FrameResult& r);
   void lose(FrameResult* r, std::string why);
 
   PipelineConfig config_;
@@ -149,6 +181,15 @@ class Pipeline {
   std::unique_ptr<AppearanceIndex> appearance_;
   std::optional<SE3> T_world_cur_;  // the last estimate (tracked, odometry or relocalised)
   double last_time_s_ = 0.0;
+  FusedFrames fused_;
+  std::vector<LoopEdge> loops_;
+  size_t loops_closed_ = 0;
+  // Per processed frame: the keyframe it moves with (npos before the first) and its pose relative to it.
+  struct Anchor {
+    size_t keyframe;
+    SE3 T_keyframe_frame;
+  };
+  std::vector<Anchor> anchors_;
   SE3 velocity_;          // T_prev_cur of the last accepted frame pair
   long lost_spell_ = 0;   // consecutive lost frames up to now
   size_t frames_ = 0, lost_ = 0;

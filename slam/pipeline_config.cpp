@@ -8,6 +8,7 @@
 #include <optional>
 #include <sstream>
 
+#include "core/bounded_read.h"
 #include "core/error.h"
 #include "slam/appearance.h"
 
@@ -144,6 +145,29 @@ void visit(V&& v, RelocalisationOptions& o) {
   v("appearance", o.appearance);
 }
 template <class V>
+void visit(V&& v, LoopClosureOptions& o) {
+  v("enabled", o.enabled);
+  v("candidates", o.candidates);
+  v("min_keyframe_gap", o.min_keyframe_gap);
+  v("max_distance_m", o.max_distance_m);
+  v("max_angle_deg", o.max_angle_deg);
+  v("min_inlier_ratio", o.min_inlier_ratio);
+  v("min_consistent", o.min_consistent);
+  v("loop_loss_chi2", o.graph.loop_loss_chi2);
+  v("loop_reject_chi2", o.graph.loop_reject_chi2);
+  v("max_iterations", o.graph.max_iterations);
+  v("time_budget_ms", o.graph.time_budget_ms);
+}
+template <class V>
+void visit(V&& v, ReintegrationOptions& o) {
+  v("enabled", o.enabled);
+  v("min_translation_m", o.min_translation_m);
+  v("min_rotation_deg", o.min_rotation_deg);
+  v("frames_per_step", o.frames_per_step);
+  v("memory_budget_mb", o.memory_budget_mb);
+  v("jpeg_quality", o.jpeg_quality);
+}
+template <class V>
 void visit_scalars(V&& v, PipelineConfig& c) {
   v("registration", c.registration);
   v("fallback_registration", c.fallback_registration);
@@ -227,6 +251,10 @@ void PipelineConfig::validate() const {
       throw Error("unknown fallback_registration '" + fallback_registration + "'");
   }
   keyframes.validate();
+  loop_closure.validate();
+  reintegration.validate();
+  if (loop_closure.graph.threads < 1 || loop_closure.graph.threads > 64)
+    throw Error("loop_closure: threads must be in [1, 64]");
   if (relocalisation.candidates < 1 || relocalisation.candidates > 100)
     throw Error("relocalisation.candidates must be in [1, 100]");
   if (!relocalisation.appearance.empty()) {
@@ -263,6 +291,8 @@ nlohmann::json config_to_json(const PipelineConfig& config) {
   j["pyramid"] = section_to_json(c.pyramid);
   j["keyframes"] = section_to_json(c.keyframes);
   j["relocalisation"] = section_to_json(c.relocalisation);
+  j["loop_closure"] = section_to_json(c.loop_closure);
+  j["reintegration"] = section_to_json(c.reintegration);
   // Always write the options in force, so a report says exactly what ran.
   RegistrationOptions r = c.registration == "groundtruth" ? RegistrationOptions{} : effective_registration_options(c);
   j["registration_options"] = section_to_json(r);
@@ -276,7 +306,7 @@ PipelineConfig config_from_json(const nlohmann::json& j, const std::string& wher
   visit_scalars(f, c);
   // The method first: the registration options start from its defaults.
   static const char* sections[] = {"volume", "integrate", "raycast", "pyramid", "registration_options",
-                                   "keyframes", "relocalisation"};
+                                   "keyframes", "relocalisation", "loop_closure", "reintegration"};
   for (auto it = j.begin(); it != j.end(); ++it) {
     const std::string& k = it.key();
     if (std::find(std::begin(sections), std::end(sections), k) != std::end(sections)) continue;
@@ -291,6 +321,9 @@ PipelineConfig config_from_json(const nlohmann::json& j, const std::string& wher
   if (j.contains("keyframes")) section_from_json(j["keyframes"], where + ": keyframes", c.keyframes);
   if (j.contains("relocalisation"))
     section_from_json(j["relocalisation"], where + ": relocalisation", c.relocalisation);
+  if (j.contains("loop_closure")) section_from_json(j["loop_closure"], where + ": loop_closure", c.loop_closure);
+  if (j.contains("reintegration"))
+    section_from_json(j["reintegration"], where + ": reintegration", c.reintegration);
   if (j.contains("registration_options") && !j["registration_options"].is_null()) {
     RegistrationOptions r =
         c.registration == "groundtruth" ? RegistrationOptions{} : effective_registration_options(c);
@@ -307,11 +340,8 @@ PipelineConfig config_from_json(const nlohmann::json& j, const std::string& wher
 }
 
 PipelineConfig load_config(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot open config file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_config(ss.str(), path);
+  // Regular files only, bounded: a FIFO or /dev/zero given as --config is refused at once (core/bounded_read.h).
+  return parse_config(read_regular_file(path, "config file"), path);
 }
 
 PipelineConfig parse_config(const std::string& text, const std::string& path) {

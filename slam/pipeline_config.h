@@ -19,6 +19,8 @@
 #include "registration/frame_pyramid.h"
 #include "registration/registration.h"
 #include "slam/keyframes.h"
+#include "slam/loop_closure.h"
+#include "slam/reintegration.h"
 
 namespace hf::slam {
 
@@ -81,6 +83,8 @@ struct PipelineConfig {
   double stream_radius_m = 0.0;
   KeyframeOptions keyframes;
   RelocalisationOptions relocalisation;
+  LoopClosureOptions loop_closure;
+  ReintegrationOptions reintegration;
 
   // Throws hf::Error naming the bad field (also validates the nested option structs).
   void validate() const;

@@ -28,6 +28,18 @@ long SequenceRun::frames_lost() const {
 Trajectory SequenceRun::estimate() const {
   Trajectory t;
   bool placed = false;  // frames lost before the map was initialised have no pose to report
+  const bool have_corrected = corrected.size() == frames.size();
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const FrameResult& f = frames[i];
+    placed = placed || f.pose_valid;
+    if (placed) t.push_back({f.timestamp_s, have_corrected ? corrected[i] : f.T_world_camera});
+  }
+  return t;
+}
+
+Trajectory SequenceRun::online_estimate() const {
+  Trajectory t;
+  bool placed = false;
   for (const auto& f : frames) {
     placed = placed || f.pose_valid;
     if (placed) t.push_back({f.timestamp_s, f.T_world_camera});
@@ -87,6 +99,9 @@ SequenceRun run_sequence(FrameSource& source, Pipeline& pipeline, const RunContr
     run.frames.push_back(std::move(r));
   }
   if (progress) progress->finish();
+  run.finish_ms = pipeline.finish(control.global);
+  run.corrected = pipeline.corrected_trajectory();
+  if (run.corrected.size() != run.frames.size()) run.corrected.clear();
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return run;
 }
@@ -144,6 +159,8 @@ RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const Fra
     s.lost_spells += spell == 1;
     s.longest_lost_spell = std::max(s.longest_lost_spell, spell);
     s.worst_frame_ms = std::max(s.worst_frame_ms, f.ms.total());
+    s.loop_worst_ms = std::max(s.loop_worst_ms, f.ms.loop);
+    s.frames_reintegrated += f.reintegrated;
     if (f.registration && f.state != TrackState::lost) {
       s.frames_degenerate += f.registration->status == RegistrationStatus::degenerate;
       s.frames_poor += f.registration->status == RegistrationStatus::poor;
@@ -155,18 +172,24 @@ RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const Fra
     sum.integrate += f.ms.integrate;
     sum.raycast += f.ms.raycast;
     sum.keyframe += f.ms.keyframe;
+    sum.loop += f.ms.loop;
+    sum.reintegrate += f.ms.reintegrate;
   }
+  s.loops_closed = pipeline.loops_closed();
+  s.finish_ms = run.finish_ms;
   s.keyframes = pipeline.keyframes().size();
   if (s.frames > 0) {
     const double n = double(s.frames);
     s.coverage /= n;
-    s.mean_ms = {sum.read / n,     sum.preprocess / n, sum.track / n,   sum.relocalise / n,
-                 sum.integrate / n, sum.raycast / n,    sum.keyframe / n};
+    s.mean_ms = {sum.read / n,     sum.preprocess / n, sum.track / n, sum.relocalise / n, sum.integrate / n,
+                 sum.raycast / n, sum.keyframe / n,   sum.loop / n,  sum.reintegrate / n};
     s.fps = sum.total() > 0 ? 1000.0 * n / sum.total() : 0.0;
   }
   if (auto eval = try_evaluate(source.ground_truth(), run.estimate())) s.metrics = eval->metrics();
   if (auto eval = try_evaluate(source.ground_truth(), run.tracked_estimate()))
     s.ate_tracked_only_m = eval->metrics().ate_m.rmse;
+  if (auto eval = try_evaluate(source.ground_truth(), run.online_estimate()))
+    s.ate_online_m = eval->metrics().ate_m.rmse;
   const auto& grid = pipeline.map();
   s.blocks_allocated = grid.block_count() + pipeline.store().size();
   s.memory_bytes = grid.memory_bytes();
@@ -199,6 +222,11 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
   j["keyframes"] = s.keyframes;
   j["worst_frame_ms"] = s.worst_frame_ms;
   j["ate_tracked_only_m"] = opt(s.ate_tracked_only_m);
+  j["ate_online_m"] = opt(s.ate_online_m);
+  j["loops_closed"] = s.loops_closed;
+  j["frames_reintegrated"] = s.frames_reintegrated;
+  j["loop_worst_ms"] = s.loop_worst_ms;
+  j["finish_ms"] = s.finish_ms;
   j["interrupted"] = s.interrupted;
   j["stopped_by"] = run.stopped_by.empty() ? nlohmann::json(nullptr) : nlohmann::json(run.stopped_by);
   j["ate_rmse_m"] = opt(s.ate_rmse_m());
@@ -210,7 +238,8 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
   j["ms_per_frame"] = {{"read", s.mean_ms.read},         {"preprocess", s.mean_ms.preprocess},
                        {"track", s.mean_ms.track},       {"relocalise", s.mean_ms.relocalise},
                        {"integrate", s.mean_ms.integrate}, {"raycast", s.mean_ms.raycast},
-                       {"keyframe", s.mean_ms.keyframe}, {"total", s.mean_ms.total()}};
+                       {"keyframe", s.mean_ms.keyframe}, {"loop", s.mean_ms.loop},
+                       {"reintegrate", s.mean_ms.reintegrate}, {"total", s.mean_ms.total()}};
   j["blocks_allocated"] = s.blocks_allocated;
   j["bytes_per_voxel"] = s.bytes_per_voxel;
   j["memory_bytes"] = s.memory_bytes;
@@ -221,6 +250,8 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
     nlohmann::json fj = {{"index", f.index}, {"timestamp_s", f.timestamp_s}, {"state", to_string(f.state)},
                          {"integrated", f.integrated}, {"keyframe", f.keyframe}, {"ms", f.ms.total()}};
     if (!f.method.empty()) fj["method"] = f.method;
+    if (f.loop_closed) fj["loop_closed"] = true;
+    if (f.reintegrated) fj["reintegrated"] = f.reintegrated;
     if (f.registration) {
       fj["registration_status"] = hf::to_string(f.registration->status);
       fj["inlier_ratio"] = f.registration->inlier_ratio;
@@ -255,7 +286,9 @@ std::string report_markdown(const RunSummary& s, const SequenceRun& run, const F
      << " |\n"
      << "| coverage | " << fmt(100.0 * s.coverage, 1) << " % of frames with a pose; " << s.lost_spells
      << " lost spells, the longest " << s.longest_lost_spell << " frames |\n"
-     << "| keyframes | " << s.keyframes << " |\n"
+     << "| keyframes | " << s.keyframes << ", " << s.loops_closed << " loops closed, " << s.frames_reintegrated
+     << " frames re-fused (worst loop stage " << fmt(s.loop_worst_ms, 1) << " ms, finish " << fmt(s.finish_ms, 0)
+     << " ms) |\n"
      << "| speed | " << fmt(s.fps, 1) << " fps (" << fmt(s.mean_ms.total(), 1) << " ms per frame, worst "
      << fmt(s.worst_frame_ms, 1) << " ms) |\n"
      << "| map | " << s.blocks_allocated << " blocks, " << fmt(double(s.memory_bytes) / (1 << 20), 1) << " MiB, "

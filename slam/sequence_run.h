@@ -30,6 +30,9 @@ struct RunControl {
   std::string progress_label;                 // non-empty: a progress bar (core/progress.h) with fps and status
   bool warn_bad_frames = true;                // print "warning: skipping frame ..." lines to stderr
   std::function<void(const FrameResult&)> on_frame;  // called after each processed frame
+  // After the last frame: Pipeline::finish(global): drain the re-fusion queue, or (global, `--global`) solve the
+  // keyframe graph once more and fuse the map anew from the final poses.
+  bool global = false;
 };
 
 struct SequenceRun {
@@ -42,9 +45,15 @@ struct SequenceRun {
   double wall_s = 0.0;                    // the whole loop
 
   long frames_lost() const;
+  // Per frame, its pose after every loop closure (and the final optimisation with `global`):
+  // Pipeline::corrected_trajectory() when the run ended. Empty when the run recorded none.
+  std::vector<SE3> corrected;
+  double finish_ms = 0.0;                 // Pipeline::finish()
   // The pose the run reports for EVERY processed frame (a lost frame's is the last estimate), TUM time stamps:
-  // what trajectory.txt holds and ATE is computed over, so a lost frame is never left out of the error.
-  Trajectory estimate() const;  // (frames lost before the first placed frame have none)
+  // the corrected pose where there is one, else the online one. What trajectory.txt holds and ATE is computed
+  // over, so a lost frame is never left out of the error.
+  Trajectory estimate() const;
+  Trajectory online_estimate() const;     // the same with each frame's online pose (FrameResult::T_world_camera)  // (frames lost before the first placed frame have none)
   Trajectory tracked_estimate() const;    // only the frames with pose_valid (for comparison)
 };
 
@@ -63,6 +72,11 @@ struct RunSummary {
   size_t keyframes = 0;
   double worst_frame_ms = 0.0;  // the slowest frame's stage total (read included)
   std::optional<double> ate_tracked_only_m;  // ATE RMSE over the frames with a valid pose only
+  std::optional<double> ate_online_m;        // ATE RMSE of the online poses (before loop closures moved them)
+  size_t loops_closed = 0;
+  size_t frames_reintegrated = 0;
+  double loop_worst_ms = 0.0;               // the slowest loop-closure stage of a frame
+  double finish_ms = 0.0;
   bool interrupted = false;
   std::optional<TrajectoryMetrics> metrics;  // ATE and RPE (1 s delta)
   double fps = 0.0;             // frames / sum of per-frame stage times

@@ -1,0 +1,77 @@
+#include "slam/loop_closure.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.h"
+
+namespace hf::slam {
+
+void LoopClosureOptions::validate() const {
+  if (candidates < 1 || candidates > 50) throw Error("loop_closure.candidates must be in [1, 50]");
+  if (min_keyframe_gap < 1) throw Error("loop_closure.min_keyframe_gap must be >= 1");
+  if (!(max_distance_m > 0) || !std::isfinite(max_distance_m))
+    throw Error("loop_closure.max_distance_m must be positive");
+  if (!(max_angle_deg > 0 && max_angle_deg <= 180)) throw Error("loop_closure.max_angle_deg must be in (0, 180]");
+  if (!(min_inlier_ratio >= 0 && min_inlier_ratio <= 1)) throw Error("loop_closure.min_inlier_ratio must be in [0, 1]");
+  if (!(min_consistent >= 0 && min_consistent <= 1)) throw Error("loop_closure.min_consistent must be in [0, 1]");
+  if (!(graph.time_budget_ms > 0) || !std::isfinite(graph.time_budget_ms))
+    throw Error("loop_closure.time_budget_ms must be positive");
+  if (graph.max_iterations < 1 || graph.max_iterations > 10000)
+    throw Error("loop_closure.max_iterations must be in [1, 10000]");
+}
+
+std::vector<size_t> loop_candidates(const KeyframeMap& keyframes, size_t k,
+                                    const std::vector<AppearanceMatch>& matches, const LoopClosureOptions& options) {
+  std::vector<size_t> out;
+  if (k >= keyframes.size()) return out;
+  const SE3& T_world_k = keyframes[k].T_world_camera;
+  for (const AppearanceMatch& m : matches) {
+    if (m.id >= keyframes.size() || m.id + size_t(options.min_keyframe_gap) > k) continue;
+    if (!keyframes.has_images(m.id)) continue;
+    const SE3 T_c_k = keyframes[m.id].T_world_camera.inverse() * T_world_k;
+    const double angle_deg = so3_log(T_c_k.rotation()).norm() * 180.0 / M_PI;
+    if (T_c_k.translation().norm() > options.max_distance_m || angle_deg > options.max_angle_deg) continue;
+    out.push_back(m.id);
+    if (out.size() >= size_t(options.candidates)) break;
+  }
+  return out;
+}
+
+Matrix6d odometry_information(const Matrix6d& information, size_t frames) {
+  // 1 mm and 0.06 degrees of standard deviation: far looser than any registration, only a floor.
+  constexpr double kFloor = 1.0;
+  Matrix6d info = information / double(std::max<size_t>(frames, 1));
+  if (!info.allFinite()) info.setZero();
+  info = 0.5 * (info + info.transpose()).eval();
+  info += kFloor * Matrix6d::Identity();
+  return info;
+}
+
+PoseGraph keyframe_graph(const KeyframeMap& keyframes, const std::vector<LoopEdge>& loops) {
+  PoseGraph g;
+  for (const Keyframe& k : keyframes.all()) g.add_node(k.T_world_camera);
+  for (size_t i = 1; i < keyframes.size(); ++i) {
+    const Keyframe& a = keyframes[i - 1];
+    const Keyframe& b = keyframes[i];
+    PoseGraphEdge e;
+    e.from = i - 1;
+    e.to = i;
+    e.T_from_to = b.T_previous_this;
+    e.information = odometry_information(b.information, b.frame_index - a.frame_index);
+    e.kind = PoseGraphEdgeKind::odometry;
+    g.add_edge(e);
+  }
+  for (const LoopEdge& l : loops) {
+    PoseGraphEdge e;
+    e.from = l.from;
+    e.to = l.to;
+    e.T_from_to = l.T_from_to;
+    e.information = l.information;
+    e.kind = PoseGraphEdgeKind::loop;
+    g.add_edge(e);
+  }
+  return g;
+}
+
+}  // namespace hf::slam

@@ -1,0 +1,65 @@
+// Loop closure over keyframes: candidates, the keyframe pose graph, and what a closed loop changes.
+//
+//   std::vector<size_t> c = loop_candidates(keyframes, k, appearance_matches, options);
+//   ... verify each candidate by registration (the pipeline does: slam/pipeline.h, stage `close_loops`) ...
+//   PoseGraph g = keyframe_graph(keyframes, loops);
+//   PoseGraphResult res = g.optimize(options.graph);
+//
+// Candidates (DVO-SLAM / ElasticFusion style): keyframes the new keyframe's appearance retrieves that are at least
+// min_keyframe_gap keyframes older (the recent ones are chained by odometry already) AND whose current pose lies
+// within max_distance_m and max_angle_deg of the new keyframe's: appearance alone confuses repeated structure, and
+// drift over a loop is far below a metre. Verification, then the pose graph's robust loss and its chi^2
+// consistency test (slam/pose_graph.h), stand between a candidate and the map.
+//
+// The graph: one node per keyframe (node 0 fixed: the map's gauge); odometry edges between consecutive keyframes
+// carrying their relative pose as tracked, with the information of the registration that placed the later one
+// divided by the frames between them (frame-to-model errors add up frame by frame, so the variance grows with the
+// gap); loop edges from the verifying registration's T_candidate_keyframe and information.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "core/se3.h"
+#include "slam/appearance.h"
+#include "slam/keyframes.h"
+#include "slam/pose_graph.h"
+
+namespace hf::slam {
+
+struct LoopClosureOptions {
+  bool enabled = true;
+  int candidates = 3;            // appearance matches verified per new keyframe (best first)
+  // Chosen on the synthetic `loop` preset (tests/slam/test_slam_recovery.cpp), checked for false loops on the real
+  // sequences (bench/results/tracking.md): the view that comes back after a lap overlaps the first keyframe by
+  // a third to a half, seen up to ~60 degrees apart.
+  int min_keyframe_gap = 5;      // candidates are at least this many keyframes older
+  double max_distance_m = 1.0;   // pose proximity of a candidate (translation between the two poses)
+  double max_angle_deg = 60.0;   // and rotation
+  double min_inlier_ratio = 0.3;  // the verifying registration's inlier ratio (status must be good)
+  double min_consistent = 0.6;   // share of the overlapping depth that agrees after verification
+  PoseGraphOptions graph;        // Ceres solve (robust loss, consistency test, time budget)
+
+  void validate() const;  // hf::Error naming the bad field
+};
+
+// A verified loop: T_world_to = T_world_from * T_from_to, from = the older keyframe.
+struct LoopEdge {
+  size_t from = 0, to = 0;
+  SE3 T_from_to;
+  Matrix6d information = Matrix6d::Identity();
+};
+
+// The keyframes worth verifying against keyframe k, best appearance first (see the header comment).
+std::vector<size_t> loop_candidates(const KeyframeMap& keyframes, size_t k,
+                                    const std::vector<AppearanceMatch>& matches, const LoopClosureOptions& options);
+
+// The pose graph over every keyframe (current poses as the initial values) with the odometry chain and `loops`.
+PoseGraph keyframe_graph(const KeyframeMap& keyframes, const std::vector<LoopEdge>& loops);
+
+// Information of an odometry edge spanning `frames` frames whose later end was placed with `information`: the
+// information divided by the frames (at least 1), floored at a small multiple of the identity so a keyframe placed
+// without registration (the first, or a relocalised one) never leaves the graph disconnected or singular.
+Matrix6d odometry_information(const Matrix6d& information, size_t frames);
+
+}  // namespace hf::slam
