@@ -115,7 +115,7 @@ TEST(Presets, UnknownNameListsTheKnownOnes) {
     EXPECT_NE(m.find("'kitchen'"), std::string::npos) << m;
     for (const auto& n : preset_names()) EXPECT_NE(m.find(n), std::string::npos) << m;
   }
-  EXPECT_EQ(preset_names().size(), 8u);
+  EXPECT_EQ(preset_names().size(), 10u);
   for (const auto& n : preset_names()) EXPECT_FALSE(make_preset(n).description.empty()) << n;
 }
 
