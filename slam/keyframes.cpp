@@ -101,7 +101,10 @@ size_t KeyframeMap::add(size_t frame_index, double timestamp_s, const SE3& T_wor
   k.frame_index = frame_index;
   k.timestamp_s = timestamp_s;
   k.T_world_camera = T_world_camera;
-  if (!keyframes_.empty()) k.T_previous_this = keyframes_.back().T_world_camera.inverse() * T_world_camera;
+  if (!keyframes_.empty()) {
+    k.T_previous_this = keyframes_.back().T_world_camera.inverse() * T_world_camera;
+    k.path_m = keyframes_.back().path_m + k.T_previous_this.translation().norm();
+  }
   k.information = information;
   k.images = CompressedRgbd::encode(depth, colour, options_.jpeg_quality);
   bytes_ += k.images.bytes();

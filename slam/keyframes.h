@@ -58,6 +58,7 @@ struct Keyframe {
   // Its pose relative to the previous keyframe as tracked (identity for the first): the odometry measurement the
   // pose graph keeps while loop closures move both ends.
   SE3 T_previous_this;
+  double path_m = 0.0;      // camera path length from the first keyframe, summed over keyframe steps
   Matrix6d information = Matrix6d::Zero();  // of the registration that placed it (zero for the first)
   CompressedRgbd images;    // empty once dropped for the budget
 };

@@ -10,6 +10,7 @@ namespace hf::slam {
 void LoopClosureOptions::validate() const {
   if (candidates < 1 || candidates > 50) throw Error("loop_closure.candidates must be in [1, 50]");
   if (min_keyframe_gap < 1) throw Error("loop_closure.min_keyframe_gap must be >= 1");
+  if (!(min_path_m >= 0) || !std::isfinite(min_path_m)) throw Error("loop_closure.min_path_m must be >= 0");
   if (!(max_distance_m > 0) || !std::isfinite(max_distance_m))
     throw Error("loop_closure.max_distance_m must be positive");
   if (!(max_angle_deg > 0 && max_angle_deg <= 180)) throw Error("loop_closure.max_angle_deg must be in (0, 180]");
@@ -29,6 +30,7 @@ std::vector<size_t> loop_candidates(const KeyframeMap& keyframes, size_t k,
   for (const AppearanceMatch& m : matches) {
     if (m.id >= keyframes.size() || m.id + size_t(options.min_keyframe_gap) > k) continue;
     if (!keyframes.has_images(m.id)) continue;
+    if (keyframes[k].path_m - keyframes[m.id].path_m < options.min_path_m) continue;
     const SE3 T_c_k = keyframes[m.id].T_world_camera.inverse() * T_world_k;
     const double angle_deg = so3_log(T_c_k.rotation()).norm() * 180.0 / M_PI;
     if (T_c_k.translation().norm() > options.max_distance_m || angle_deg > options.max_angle_deg) continue;

@@ -149,6 +149,7 @@ void visit(V&& v, LoopClosureOptions& o) {
   v("enabled", o.enabled);
   v("candidates", o.candidates);
   v("min_keyframe_gap", o.min_keyframe_gap);
+  v("min_path_m", o.min_path_m);
   v("max_distance_m", o.max_distance_m);
   v("max_angle_deg", o.max_angle_deg);
   v("min_inlier_ratio", o.min_inlier_ratio);

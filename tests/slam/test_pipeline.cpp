@@ -17,39 +17,15 @@
 #include "datasets/synthetic_source.h"
 #include "registration/icp.h"
 #include "slam/pipeline.h"
+#include "tests/slam/pipeline_test_util.h"
 #include "slam/sequence_run.h"
 
 namespace hf::slam {
 namespace {
 
-// A frame source that hands frames of another through a modifier (for injecting garbage).
-class ModifiedSource : public FrameSource {
- public:
-  ModifiedSource(std::unique_ptr<FrameSource> inner, std::function<void(RgbdFrame&)> modify)
-      : inner_(std::move(inner)), modify_(std::move(modify)) {}
-  FrameRead next() override {
-    FrameRead r = inner_->next();
-    if (r.status == FrameStatus::ok) modify_(r.frame);
-    return r;
-  }
-  const PinholeCamera& camera() const override { return inner_->camera(); }
-  const std::string& camera_origin() const override { return inner_->camera_origin(); }
-  size_t size() const override { return inner_->size(); }
-  const std::string& name() const override { return inner_->name(); }
-  const Trajectory& ground_truth() const override { return inner_->ground_truth(); }
+using test::ModifiedSource;
 
- private:
-  std::unique_ptr<FrameSource> inner_;
-  std::function<void(RgbdFrame&)> modify_;
-};
-
-datasets::SyntheticOptions half_res(const std::string& preset, int frames) {
-  datasets::SyntheticOptions o;
-  o.preset = preset;
-  o.frames = frames;
-  o.camera = PinholeCamera::preset("ros").scaled(1);  // 320x240
-  return o;
-}
+using test::half_res;
 
 PipelineConfig config_for(const std::string& registration) {
   PipelineConfig c;

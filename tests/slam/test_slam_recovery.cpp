@@ -11,18 +11,13 @@
 #include "datasets/synthetic_sequence.h"
 #include "datasets/synthetic_source.h"
 #include "slam/pipeline.h"
+#include "tests/slam/pipeline_test_util.h"
 #include "slam/sequence_run.h"
 
 namespace hf::slam {
 namespace {
 
-datasets::SyntheticOptions half_res(const std::string& preset, int frames) {
-  datasets::SyntheticOptions o;
-  o.preset = preset;
-  o.frames = frames;
-  o.camera = PinholeCamera::preset("ros").scaled(1);  // 320x240
-  return o;
-}
+using test::half_res;
 
 PipelineConfig default_config() {
   PipelineConfig c;

@@ -1,0 +1,173 @@
+// Keyframes (selection, compressed images, memory budget), loop candidates and the keyframe graph's edges, and the
+// re-fusion queue of slam/reintegration.h.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/error.h"
+#include "fusion/integrate.h"
+#include "slam/keyframes.h"
+#include "slam/loop_closure.h"
+#include "slam/reintegration.h"
+
+namespace hf::slam {
+namespace {
+
+SE3 pose(double x_m, double yaw_deg = 0.0) {
+  return SE3(Eigen::Quaterniond(Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitY())),
+             Eigen::Vector3d(x_m, 0.0, 0.0));
+}
+
+DepthImage noisy_depth(int w, int h, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> d(0.5f, 4.0f);
+  DepthImage img(w, h);
+  for (float& v : img.pixels()) v = d(rng);
+  img(0, 0) = 0.0f;                        // no depth stays no depth
+  img(1, 0) = std::nanf("");               // NaN is no depth
+  img(2, 0) = 20.0f;                       // beyond 13.1 m (the 16-bit range) is no depth
+  return img;
+}
+
+TEST(CompressedRgbd, DepthRoundTripsToTheTumUnitAndColourIsKept) {
+  const DepthImage depth = noisy_depth(64, 48, 1);
+  ColorImage colour(64, 48, Rgb8{100, 150, 200});
+  const CompressedRgbd c = CompressedRgbd::encode(depth, colour, 95);
+  const DepthImage back = c.depth();
+  ASSERT_EQ(back.width(), 64);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const float d = depth(x, y);
+      if (!(d > 0.0f) || !std::isfinite(d) || d > 13.0f) {
+        EXPECT_EQ(back(x, y), 0.0f) << x << "," << y;
+      } else {
+        EXPECT_NEAR(back(x, y), d, 0.5f / 5000.0f + 1e-6f);  // half a 1/5000 m unit
+      }
+    }
+  // Quantised depth is stored exactly.
+  DepthImage q = depth;
+  quantise_depth_tum(&q);
+  EXPECT_EQ(CompressedRgbd::encode(q, {}, 90).depth().pixels(), q.pixels());
+  const ColorImage cb = c.colour();
+  ASSERT_EQ(cb.width(), 64);
+  EXPECT_NEAR(cb(10, 10).r, 100, 3);  // JPEG of a flat colour
+  EXPECT_NEAR(cb(10, 10).b, 200, 3);
+  EXPECT_TRUE(CompressedRgbd::encode(depth, {}, 90).colour().empty());
+  CompressedRgbd corrupt = c;
+  corrupt.depth_png.resize(20);
+  EXPECT_THROW(corrupt.depth(), Error);
+}
+
+TEST(KeyframeMap, SelectsByMotionAndFrameGap) {
+  KeyframeOptions o;
+  o.min_translation_m = 0.1;
+  o.min_rotation_deg = 10.0;
+  o.max_frames_between = 30;
+  KeyframeMap map(o);
+  const DepthImage d = noisy_depth(32, 24, 2);
+  EXPECT_TRUE(map.wants_keyframe(pose(0.0), 0));
+  map.add(0, 0.0, pose(0.0), Matrix6d::Identity(), d, {});
+  EXPECT_FALSE(map.wants_keyframe(pose(0.09), 5));
+  EXPECT_TRUE(map.wants_keyframe(pose(0.11), 5));
+  EXPECT_FALSE(map.wants_keyframe(pose(0.0, 9.0), 5));
+  EXPECT_TRUE(map.wants_keyframe(pose(0.0, 11.0), 5));
+  EXPECT_TRUE(map.wants_keyframe(pose(0.0), 30));
+  map.add(30, 1.0, pose(0.3), Matrix6d::Identity(), d, {});
+  EXPECT_NEAR(map[1].path_m, 0.3, 1e-12);
+  EXPECT_NEAR(map[1].T_previous_this.translation().x(), 0.3, 1e-12);
+}
+
+TEST(KeyframeMap, BudgetDropsTheOldestImagesNeverTheNewest) {
+  KeyframeOptions o;
+  KeyframeMap probe(o);
+  const DepthImage d = noisy_depth(64, 48, 3);
+  probe.add(0, 0.0, pose(0.0), Matrix6d::Identity(), d, {});
+  const double one_mb = double(probe.memory_bytes()) / (1024.0 * 1024.0);
+  o.memory_budget_mb = 2.5 * one_mb;  // room for two keyframes' images
+  KeyframeMap map(o);
+  for (int i = 0; i < 5; ++i) map.add(size_t(i), i, pose(0.2 * i), Matrix6d::Identity(), noisy_depth(64, 48, 3), {});
+  EXPECT_FALSE(map.has_images(0));
+  EXPECT_FALSE(map.has_images(2));
+  EXPECT_TRUE(map.has_images(3));
+  EXPECT_TRUE(map.has_images(4));
+  EXPECT_TRUE(map.depth(0).empty());
+  EXPECT_LE(double(map.memory_bytes()), o.memory_budget_mb * 1024.0 * 1024.0);
+  o.memory_budget_mb = 0.0;  // even with no budget the newest keeps its images
+  KeyframeMap none(o);
+  none.add(0, 0.0, pose(0.0), Matrix6d::Identity(), d, {});
+  EXPECT_TRUE(none.has_images(0));
+}
+
+TEST(LoopCandidates, NeedGapPathAndProximity) {
+  KeyframeMap map;
+  const DepthImage d = noisy_depth(16, 12, 4);
+  // A lap: out 1.5 m along x and back; keyframe 10 is back near keyframe 0.
+  for (int i = 0; i <= 10; ++i) {
+    const double x = i <= 5 ? 0.3 * i : 0.3 * (10 - i);
+    map.add(size_t(i * 10), i, pose(x), Matrix6d::Identity(), d, {});
+  }
+  ASSERT_NEAR(map[10].path_m, 3.0, 1e-9);
+  LoopClosureOptions o;
+  std::vector<AppearanceMatch> matches;
+  for (size_t i : {9u, 0u, 1u, 5u, 8u}) matches.push_back({i, 0.0});
+  const std::vector<size_t> c = loop_candidates(map, 10, matches, o);
+  // 9 and 8: too recent; 5: 1.5 m away; 0 and 1 qualify, in appearance order.
+  EXPECT_EQ(c, (std::vector<size_t>{0, 1}));
+  o.min_path_m = 5.0;
+  EXPECT_TRUE(loop_candidates(map, 10, matches, o).empty());
+  EXPECT_TRUE(loop_candidates(map, 99, matches, o).empty());
+}
+
+TEST(KeyframeGraph, OdometryEdgesKeepTheTrackedMeasurementAndAreWellPosed) {
+  KeyframeMap map;
+  const DepthImage d = noisy_depth(16, 12, 5);
+  map.add(0, 0.0, pose(0.0), Matrix6d::Zero(), d, {});
+  map.add(10, 1.0, pose(0.2), 1e6 * Matrix6d::Identity(), d, {});
+  map.set_pose(1, pose(0.25));  // a later correction must not change the measurement
+  const PoseGraph g = keyframe_graph(map, {{0, 1, pose(0.2), 1e4 * Matrix6d::Identity()}});
+  ASSERT_EQ(g.num_edges(), 2u);
+  EXPECT_NEAR(g.edges()[0].T_from_to.translation().x(), 0.2, 1e-12);
+  // Information per frame: 1e6 over 10 frames, plus the floor.
+  EXPECT_NEAR(g.edges()[0].information(0, 0), 1e5 + 1.0, 1e-6);
+  const Matrix6d floor_only = odometry_information(Matrix6d::Zero(), 0);
+  EXPECT_GT(floor_only.ldlt().vectorD().minCoeff(), 0.0);
+  Matrix6d nan = Matrix6d::Identity();
+  nan(0, 0) = std::nan("");
+  EXPECT_TRUE(odometry_information(nan, 3).allFinite());
+}
+
+TEST(FusedFrames, MovedFramesAreReFusedMostChangedFirst) {
+  const PinholeCamera cam = PinholeCamera::preset("ros").scaled(3);  // 80x60
+  fusion::VolumeParams vp;
+  vp.voxel_m = 0.02;
+  vp.capacity_blocks = 1 << 14;
+  fusion::VoxelBlockGrid grid(vp);
+  DepthImage wall(cam.width, cam.height, 1.0f);  // a plane 1 m in front
+  KeyframeMap keys;
+  keys.add(0, 0.0, pose(0.0), Matrix6d::Identity(), wall, {});
+  keys.add(1, 0.1, pose(0.1), Matrix6d::Identity(), wall, {});
+  FusedFrames fused;
+  for (size_t k = 0; k < 2; ++k) {
+    fusion::integrate(grid, wall, {}, cam, keys[k].T_world_camera);
+    fused.add(k, k, keys[k].T_world_camera, keys[k].T_world_camera, wall, {});
+  }
+  fused.schedule(keys);
+  EXPECT_EQ(fused.pending(), 0u);  // nothing moved
+  keys.set_pose(1, pose(0.1 + 0.03));
+  fused.schedule(keys);
+  ASSERT_EQ(fused.pending(), 1u);
+  EXPECT_EQ(fused.step(5, keys, grid, cam, {}, nullptr), 1u);
+  EXPECT_EQ(fused.pending(), 0u);
+  EXPECT_EQ(fused.refused(), 1u);
+  // Re-fused: the map equals fusing both frames at their final poses from scratch.
+  fusion::VoxelBlockGrid fresh(vp);
+  fusion::integrate(fresh, wall, {}, cam, keys[0].T_world_camera);
+  fusion::integrate(fresh, wall, {}, cam, keys[1].T_world_camera);
+  EXPECT_EQ(grid.block_count(), fresh.block_count());
+  fused.refuse_all(keys, grid, cam, {}, nullptr);
+  EXPECT_EQ(grid.block_count(), fresh.block_count());
+}
+
+}  // namespace
+}  // namespace hf::slam
