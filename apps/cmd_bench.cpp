@@ -18,6 +18,7 @@ struct BenchCliOptions {
   std::vector<std::string> inputs;
   std::string registration = "all";
   std::string peers = "all";
+  std::string loop_closure = "on";
   std::string out = "out/bench";
   double voxel_m = 0.01;
   std::string backend = "cpu";
@@ -49,6 +50,7 @@ void run_bench_command(const BenchCliOptions& c) {
   o.inputs = c.inputs;
   o.registrations = bench::resolve_registrations(c.registration);
   o.peers = bench::resolve_peers(c.peers);
+  o.loop_closure_modes = bench::resolve_loop_closure_modes(c.loop_closure);
   o.out = c.out;
   o.voxel_m = c.voxel_m;
   o.backend = c.backend;
@@ -93,6 +95,9 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--registration", opts->registration, "all, or a comma-separated list of registration methods")
       ->capture_default_str();
   cmd->add_option("--peers", opts->peers, "PCL peers: all, none, or a comma-separated list of gicp, ndt")
+      ->capture_default_str();
+  cmd->add_option("--loop-closure", opts->loop_closure,
+                  "loop-closure modes each registration runs in: all, or a list of off, on, global (run --global)")
       ->capture_default_str();
   cmd->add_option("--out", opts->out, "output folder")->capture_default_str();
   cmd->add_option("--voxel-m", opts->voxel_m, "TSDF voxel size in metres")->check(CLI::PositiveNumber)

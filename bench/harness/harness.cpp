@@ -59,9 +59,9 @@ std::string source_name(const BenchInput& input, const FrameSource& source) {
 }
 
 RunRow run_method(const BenchInput& input, const std::string& folder, const std::string& method,
-                  const BenchOptions& o, Trajectory& estimate) {
+                  const std::string& loop_mode, const BenchOptions& o, Trajectory& estimate) {
   RunRow row;
-  row.method = method;
+  row.method = loop_closure_label(method, loop_mode);
   row.input = input.label;
   const auto start = std::chrono::steady_clock::now();
   try {
@@ -73,17 +73,23 @@ RunRow run_method(const BenchInput& input, const std::string& folder, const std:
     config.backend = o.backend;
     config.volume.voxel_m = o.voxel_m;
     if (o.tracking_level >= 0) config.tracking_level = o.tracking_level;
+    if (loop_mode == "off") config.loop_closure.enabled = false;
     slam::Pipeline pipeline(config, source->camera());
     slam::RunControl control;
+    control.global = loop_mode == "global";
     control.max_frames = o.max_frames;
     control.stop = o.stop;
-    if (o.progress) control.progress_label = input.label + " " + method;
+    if (o.progress) control.progress_label = input.label + " " + row.method;
     const slam::SequenceRun run = slam::run_sequence(*source, pipeline, control);
     const slam::RunSummary s = slam::summarize(run, pipeline, *source, input.spec);
     row.interrupted = s.interrupted;
     row.frames = s.frames;
     row.frames_bad = s.frames_bad;
     row.frames_lost = s.frames_lost;
+    row.coverage = s.coverage;
+    row.lost_spells = s.lost_spells;
+    row.longest_lost_spell = s.longest_lost_spell;
+    row.worst_frame_ms = s.worst_frame_ms;
     row.ate_rmse_m = s.ate_rmse_m();
     row.rpe_trans_m_per_s = s.rpe_trans_m_per_s();
     row.rpe_rot_deg_per_s = s.rpe_rot_deg_per_s();
@@ -116,7 +122,15 @@ RunRow run_peer_row(const BenchInput& input, const std::string& folder, const st
     row.frames_bad = run.frames_bad;
     row.frames_lost = run.frames_lost();
     double sum_read = 0, sum_pre = 0, sum_track = 0;
-    for (const PeerFrame& f : run.frames) sum_read += f.ms_read, sum_pre += f.ms_preprocess, sum_track += f.ms_track;
+    long spell = 0;
+    for (const PeerFrame& f : run.frames) {
+      sum_read += f.ms_read, sum_pre += f.ms_preprocess, sum_track += f.ms_track;
+      row.worst_frame_ms = std::max(row.worst_frame_ms, f.ms_read + f.ms_preprocess + f.ms_track);
+      spell = f.pose_valid ? 0 : spell + 1;
+      row.lost_spells += spell == 1;
+      row.longest_lost_spell = std::max(row.longest_lost_spell, spell);
+    }
+    row.coverage = run.frames.empty() ? 0.0 : 1.0 - double(row.frames_lost) / double(run.frames.size());
     const double n = std::max<double>(1.0, double(run.frames.size()));
     row.ms = {sum_read / n, sum_pre / n, sum_track / n, 0.0, 0.0, (sum_read + sum_pre + sum_track) / n};
     const double total_ms = sum_read + sum_pre + sum_track;
@@ -200,7 +214,9 @@ BenchReport run_bench(const BenchOptions& o) {
   results.machine = current_machine(o.source_dir, o.command_line);
   results.settings = settings_line(o);
   results.notes = discovered.notes;
-  for (const std::string& m : o.registrations) results.methods.push_back(m);
+  if (o.loop_closure_modes.empty()) throw Error("bench: no loop-closure mode");
+  for (const std::string& m : o.registrations)
+    for (const std::string& mode : o.loop_closure_modes) results.methods.push_back(loop_closure_label(m, mode));
   for (const std::string& p : o.peers) results.methods.push_back(p + " (peer)");
   for (const std::string& note : discovered.notes) std::cerr << "note: " << note << "\n";
 
@@ -247,10 +263,12 @@ BenchReport run_bench(const BenchOptions& o) {
       results.runs.push_back(std::move(row));
     };
     for (const std::string& method : o.registrations) {
-      if (o.stop && o.stop->load()) break;
-      Trajectory estimate;
-      RunRow row = run_method(input, folder, method, o, estimate);
-      record(std::move(row), estimate);
+      for (const std::string& mode : o.loop_closure_modes) {
+        if (o.stop && o.stop->load()) break;
+        Trajectory estimate;
+        RunRow row = run_method(input, folder, method, mode, o, estimate);
+        record(std::move(row), estimate);
+      }
     }
     for (const std::string& peer : o.peers) {
       if (o.stop && o.stop->load()) break;

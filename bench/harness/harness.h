@@ -29,6 +29,10 @@ struct BenchOptions {
   std::vector<std::string> inputs;         // --input PATH... (see inputs.h)
   std::vector<std::string> registrations;  // registry names (resolve_registrations)
   std::vector<std::string> peers;          // "gicp", "ndt" (resolve_peers)
+  // Loop-closure modes each registration runs in (resolve_loop_closure_modes): "on" (the pipeline's default),
+  // "off" (loop_closure.enabled false) and "global" (on, plus Pipeline::finish(true), `run --global`). Each mode
+  // is its own column of the tables: the method's name alone for "on", "NAME +global" and "NAME -loops".
+  std::vector<std::string> loop_closure_modes = {"on"};
   std::string out = "out/bench";
   double voxel_m = 0.01;
   std::string backend = "cpu";
@@ -48,6 +52,11 @@ struct BenchOptions {
 // "all" -> registration_names(); else a comma-separated list of registry names (and "groundtruth"). Throws
 // hf::Error naming an unknown method and listing the known ones, or for an empty list.
 std::vector<std::string> resolve_registrations(const std::string& spec);
+// "all" -> {off, on, global}; else a comma-separated subset. Throws hf::Error otherwise.
+std::vector<std::string> resolve_loop_closure_modes(const std::string& spec);
+// The table label of `method` run in loop-closure `mode` (see BenchOptions::loop_closure_modes).
+std::string loop_closure_label(const std::string& method, const std::string& mode);
+
 // "none" -> {}; "all" -> peer_names(); else a comma-separated subset of peer_names(). Throws hf::Error otherwise.
 std::vector<std::string> resolve_peers(const std::string& spec);
 

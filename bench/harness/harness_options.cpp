@@ -41,6 +41,23 @@ std::vector<std::string> resolve_registrations(const std::string& spec) {
   return list;
 }
 
+std::vector<std::string> resolve_loop_closure_modes(const std::string& spec) {
+  const std::vector<std::string> known = {"off", "on", "global"};
+  if (spec == "all") return known;
+  const std::vector<std::string> list = split_list(spec);
+  if (list.empty()) throw Error("--loop-closure: expected 'all' or a comma-separated list of " + joined(known));
+  for (const std::string& m : list)
+    if (std::find(known.begin(), known.end(), m) == known.end())
+      throw Error("--loop-closure: unknown mode '" + m + "' (known: " + joined(known) + ", or all)");
+  return list;
+}
+
+std::string loop_closure_label(const std::string& method, const std::string& mode) {
+  if (mode == "off") return method + " -loops";
+  if (mode == "global") return method + " +global";
+  return method;
+}
+
 std::vector<std::string> resolve_peers(const std::string& spec) {
   const std::vector<std::string> known = peer_names();
   if (spec == "none" || spec.empty()) return {};

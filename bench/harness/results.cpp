@@ -81,7 +81,7 @@ std::vector<std::pair<std::string, InputGroup>> group_by_input(const std::vector
 const char* const kCsvColumns[] = {
     "method", "peer", "input", "source", "status", "error", "frames", "frames_bad", "frames_lost", "ate_rmse_m",
     "rpe_trans_m_per_s", "rpe_rot_deg_per_s", "fps", "ms_read", "ms_preprocess", "ms_track", "ms_integrate",
-    "ms_raycast", "ms_total", "wall_s"};
+    "ms_raycast", "ms_total", "wall_s", "coverage", "lost_spells", "longest_lost_spell", "worst_frame_ms"};
 constexpr size_t kCsvColumnCount = sizeof kCsvColumns / sizeof kCsvColumns[0];
 
 std::string csv_field(const std::string& s) {
@@ -283,7 +283,8 @@ std::string results_to_csv(const std::vector<RunRow>& runs) {
         csv_field(r.error), std::to_string(r.frames), std::to_string(r.frames_bad), std::to_string(r.frames_lost),
         opt(r.ate_rmse_m), opt(r.rpe_trans_m_per_s), opt(r.rpe_rot_deg_per_s), number(r.fps), number(r.ms.read),
         number(r.ms.preprocess), number(r.ms.track), number(r.ms.integrate), number(r.ms.raycast),
-        number(r.ms.total), number(r.wall_s)};
+        number(r.ms.total), number(r.wall_s), number(r.coverage), std::to_string(r.lost_spells),
+        std::to_string(r.longest_lost_spell), number(r.worst_frame_ms)};
     for (size_t k = 0; k < fields.size(); ++k) out << (k ? "," : "") << fields[k];
     out << "\n";
   }
@@ -392,6 +393,10 @@ std::vector<RunRow> results_from_csv(const std::string& text, const std::string&
     r.fps = to_double(12);
     r.ms = {to_double(13), to_double(14), to_double(15), to_double(16), to_double(17), to_double(18)};
     r.wall_s = to_double(19);
+    r.coverage = to_double(20);
+    r.lost_spells = to_long(21);
+    r.longest_lost_spell = to_long(22);
+    r.worst_frame_ms = to_double(23);
     runs.push_back(std::move(r));
   }
   return runs;
@@ -430,7 +435,11 @@ nlohmann::json results_to_json(const BenchResults& results) {
                       {"integrate", r.ms.integrate},
                       {"raycast", r.ms.raycast},
                       {"total", r.ms.total}}},
-                    {"wall_s", r.wall_s}});
+                    {"wall_s", r.wall_s},
+                    {"coverage", r.coverage},
+                    {"lost_spells", r.lost_spells},
+                    {"longest_lost_spell", r.longest_lost_spell},
+                    {"worst_frame_ms", r.worst_frame_ms}});
   }
   j["runs"] = runs;
   const WltTable t = won_lost_tie(results.runs, results.methods);
@@ -493,6 +502,10 @@ BenchResults results_from_json(const nlohmann::json& j, const std::string& file)
       row.ms = {ms.at("read").get<double>(),      ms.at("preprocess").get<double>(), ms.at("track").get<double>(),
                 ms.at("integrate").get<double>(), ms.at("raycast").get<double>(),    ms.at("total").get<double>()};
       row.wall_s = r.at("wall_s").get<double>();
+      row.coverage = r.value("coverage", 0.0);
+      row.lost_spells = r.value("lost_spells", 0L);
+      row.longest_lost_spell = r.value("longest_lost_spell", 0L);
+      row.worst_frame_ms = r.value("worst_frame_ms", 0.0);
       b.runs.push_back(std::move(row));
     }
     return b;
@@ -538,24 +551,25 @@ std::string results_to_markdown(const BenchResults& results, const std::vector<s
     std::set<size_t> front;
     for (size_t k : pareto_front(points)) front.insert(k);
     md << "### " << input << "\n\n" << rows.front()->source << "\n\n"
-       << "| method | ATE RMSE [m] | RPE [m/s] | RPE [deg/s] | frames | lost | fps | read | preprocess | track | "
-          "integrate | raycast | total [ms] | Pareto |\n"
-       << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
+       << "| method | ATE RMSE [m] | RPE [m/s] | RPE [deg/s] | frames | lost | coverage | lost spells (longest) | "
+          "fps | read | preprocess | track | integrate | raycast | total [ms] | worst frame [ms] | Pareto |\n"
+       << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
     for (size_t k = 0; k < rows.size(); ++k) {
       const RunRow& r = *rows[k];
       md << "| " << r.display_name() << " | ";
       if (r.failed) {
         std::string error = r.error;
         std::replace(error.begin(), error.end(), '|', '/');
-        md << "failed: " << error << " | | | | | | | | | | | | |\n";
+        md << "failed: " << error << " | | | | | | | | | | | | | | | |\n";
         continue;
       }
       md << metres(r.ate_rmse_m) << " | " << metres(r.rpe_trans_m_per_s) << " | "
          << (r.rpe_rot_deg_per_s ? fixed(*r.rpe_rot_deg_per_s, 3) : std::string("-")) << " | " << r.frames
-         << (r.interrupted ? " (interrupted)" : "") << " | " << r.frames_lost << " | " << fixed(r.fps, 1) << " | "
-         << fixed(r.ms.read, 1) << " | " << fixed(r.ms.preprocess, 1) << " | " << fixed(r.ms.track, 1) << " | "
+         << (r.interrupted ? " (interrupted)" : "") << " | " << r.frames_lost << " | "
+         << fixed(100.0 * r.coverage, 1) << " % | " << r.lost_spells << " (" << r.longest_lost_spell << ") | "
+         << fixed(r.fps, 1) << " | " << fixed(r.ms.read, 1) << " | " << fixed(r.ms.preprocess, 1) << " | " << fixed(r.ms.track, 1) << " | "
          << fixed(r.ms.integrate, 1) << " | " << fixed(r.ms.raycast, 1) << " | " << fixed(r.ms.total, 1) << " | "
-         << (front.count(k) ? "yes" : "") << " |\n";
+         << fixed(r.worst_frame_ms, 0) << " | " << (front.count(k) ? "yes" : "") << " |\n";
     }
     md << "\n";
   }

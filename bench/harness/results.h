@@ -41,6 +41,11 @@ struct RunRow {
   std::string error;
   bool interrupted = false;
   long frames = 0, frames_bad = 0, frames_lost = 0;
+  // Tracking recovery (slam/sequence_run.h RunSummary): frames with a pose / frames, runs of lost frames, and the
+  // slowest frame (loop-closure work included). Peers: coverage from their lost frames, worst frame measured too.
+  double coverage = 0.0;
+  long lost_spells = 0, longest_lost_spell = 0;
+  double worst_frame_ms = 0.0;
   std::optional<double> ate_rmse_m, rpe_trans_m_per_s, rpe_rot_deg_per_s;
   double fps = 0.0;        // frames / sum of per-frame stage times
   StageMs ms;

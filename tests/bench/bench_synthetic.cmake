@@ -1,9 +1,9 @@
 # hashfusion bench over a 6-frame synthetic wall: results.{csv,json,md} and both plots exist, there is one run per
-# method (every registration in the registry plus the peers), the W-L-T table has a row per method, and the
-# rendered synthetic frames were cleaned up.
+# method (every registration in the registry in each loop-closure mode, plus the peers), the W-L-T table has a row
+# per method, and the rendered synthetic frames were cleaned up.
 file(REMOVE_RECURSE ${OUT})
 execute_process(COMMAND ${HASHFUSION} bench --input synthetic:wall --synthetic-frames 6 --max-frames 6
-                        --registration all --peers all --out ${OUT}
+                        --registration all --loop-closure all --peers all --out ${OUT}
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "bench failed (${rc}): ${err}")
@@ -20,8 +20,11 @@ file(READ ${OUT}/results.json json)
 file(READ ${OUT}/results.md md)
 string(JSON n_methods LENGTH "${json}" methods)
 string(JSON n_runs LENGTH "${json}" runs)
-if(n_methods LESS 3)
-  message(FATAL_ERROR "expected at least the 3 registrations, results.json lists ${n_methods} methods")
+if(n_methods LESS 9)
+  message(FATAL_ERROR "expected at least 3 registrations x 3 loop-closure modes, results.json lists ${n_methods} methods")
+endif()
+if(NOT json MATCHES "\"combined -loops\"" OR NOT json MATCHES "\"combined \\+global\"")
+  message(FATAL_ERROR "no loop-closure variants among the methods: ${json}")
 endif()
 if(NOT n_runs EQUAL n_methods)
   message(FATAL_ERROR "expected one run per method on one input: ${n_runs} runs for ${n_methods} methods")

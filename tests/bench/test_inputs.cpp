@@ -114,6 +114,13 @@ TEST(BenchMethods, RegistrationsComeFromTheRegistry) {
   EXPECT_TRUE(resolve_peers("none").empty());
   EXPECT_EQ(resolve_peers("all"), peer_names());
   EXPECT_THROW(resolve_peers("icp"), Error);
+  EXPECT_EQ(resolve_loop_closure_modes("all"), (std::vector<std::string>{"off", "on", "global"}));
+  EXPECT_EQ(resolve_loop_closure_modes("global,on"), (std::vector<std::string>{"global", "on"}));
+  EXPECT_THROW(resolve_loop_closure_modes("sometimes"), Error);
+  EXPECT_THROW(resolve_loop_closure_modes(""), Error);
+  EXPECT_EQ(loop_closure_label("icp", "on"), "icp");
+  EXPECT_EQ(loop_closure_label("icp", "off"), "icp -loops");
+  EXPECT_EQ(loop_closure_label("icp", "global"), "icp +global");
   EXPECT_EQ(file_safe("synthetic:wall"), "synthetic_wall");
   EXPECT_EQ(file_safe("a/b c.d"), "a_b_c.d");
 }

@@ -132,6 +132,10 @@ RunRow awkward() {
   r.ms = {0.1, 1.0 / 7.0, 12.5, 3.0, 2.0, 17.7};
   r.wall_s = 4.0e-3;
   r.frames_bad = 2;
+  r.coverage = 119.0 / 123.0;
+  r.lost_spells = 3;
+  r.longest_lost_spell = 2;
+  r.worst_frame_ms = 1.0 / 3.0 + 80.0;
   return r;
 }
 
@@ -157,6 +161,10 @@ void expect_same(const RunRow& a, const RunRow& b) {
   EXPECT_EQ(a.ms.raycast, b.ms.raycast);
   EXPECT_EQ(a.ms.total, b.ms.total);
   EXPECT_EQ(a.wall_s, b.wall_s);
+  EXPECT_EQ(a.coverage, b.coverage);
+  EXPECT_EQ(a.lost_spells, b.lost_spells);
+  EXPECT_EQ(a.longest_lost_spell, b.longest_lost_spell);
+  EXPECT_EQ(a.worst_frame_ms, b.worst_frame_ms);
 }
 
 std::vector<RunRow> round_trip_rows() {
