@@ -59,8 +59,14 @@ slam::PipelineConfig make_config(const RunOptions& o, const CLI::App& cmd) {
   if (o.config_file.empty() || cmd.count("--voxel-m")) c.volume.voxel_m = o.voxel_m;
   if (o.tracking_level >= 0) c.tracking_level = o.tracking_level;
   if (o.capacity_blocks > 0) c.volume.capacity_blocks = o.capacity_blocks;
-  // A method change on the command line must not inherit another method's options from the file.
-  if (cmd.count("--registration") && c.registration_options && !o.config_file.empty()) c.registration_options.reset();
+  // A method change on the command line keeps the file's driver settings (shared by every method) and takes the
+  // new method's own knobs from their pipeline defaults.
+  if (cmd.count("--registration") && c.registration_options && !o.config_file.empty() &&
+      c.registration != "groundtruth") {
+    RegistrationOptions fresh = slam::pipeline_registration_options(c.registration);
+    fresh.driver = c.registration_options->driver;
+    c.registration_options = fresh;
+  }
   c.validate();
   return c;
 }

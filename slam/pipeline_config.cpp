@@ -174,7 +174,6 @@ void visit_scalars(V&& v, PipelineConfig& c) {
   v("fallback_registration", c.fallback_registration);
   v("backend", c.backend);
   v("tracking_level", c.tracking_level);
-  v("rgb_weight", c.rgb_weight);
   v("constant_velocity", c.constant_velocity);
   v("max_speed_m_per_s", c.max_speed_m_per_s);
   v("max_angular_speed_deg_per_s", c.max_angular_speed_deg_per_s);
@@ -227,11 +226,15 @@ nlohmann::json migrate_registration_options(const nlohmann::json& j, const Regis
 
 }  // namespace
 
+RegistrationOptions pipeline_registration_options(const std::string& method) {
+  RegistrationOptions o = default_registration_options(method);
+  o.set("rgb_weight", kPipelineRgbWeight);  // methods without photometric rows have no such knob
+  return o;
+}
+
 RegistrationOptions effective_registration_options(const PipelineConfig& c) {
   if (c.registration_options) return *c.registration_options;
-  RegistrationOptions o = default_registration_options(c.registration);
-  o.set("rgb_weight", c.rgb_weight);  // methods without photometric rows have no such knob
-  return o;
+  return pipeline_registration_options(c.registration);
 }
 
 
@@ -272,7 +275,6 @@ void PipelineConfig::validate() const {
     throw Error("integrate.observation_weight must be positive");
   if (pyramid.levels < 1 || pyramid.levels > 6) throw Error("pyramid.levels must be in [1, 6]");
   if (tracking_level < 0 || tracking_level > 2) throw Error("tracking_level must be 0, 1 or 2");
-  if (!(rgb_weight >= 0 && std::isfinite(rgb_weight))) throw Error("rgb_weight must be finite and >= 0");
   if (registration_options) registration_options->validate();
   if (!(max_speed_m_per_s > 0)) throw Error("max_speed_m_per_s must be positive");
   if (!(max_angular_speed_deg_per_s > 0)) throw Error("max_angular_speed_deg_per_s must be positive");
@@ -311,6 +313,7 @@ PipelineConfig config_from_json(const nlohmann::json& j, const std::string& wher
   for (auto it = j.begin(); it != j.end(); ++it) {
     const std::string& k = it.key();
     if (std::find(std::begin(sections), std::end(sections), k) != std::end(sections)) continue;
+    if (k == "rgb_weight") continue;  // a former top-level key, read into registration_options below
     nlohmann::json probe;
     visit_scalars(ToJson{&probe}, c);
     if (!probe.contains(k)) throw Error(where + ": unknown key '" + k + "'");
@@ -331,6 +334,20 @@ PipelineConfig config_from_json(const nlohmann::json& j, const std::string& wher
     section_from_json(migrate_registration_options(j["registration_options"], r), where + ": registration_options",
                       r);
     c.registration_options = r;
+  }
+  // Configs written before registration options had one home kept lambda at the top level (as "rgb_weight"); it
+  // applies where registration_options does not set it itself.
+  if (j.contains("rgb_weight") && c.registration != "groundtruth") {
+    const nlohmann::json& w = j["rgb_weight"];
+    if (!w.is_number() || !std::isfinite(w.get<double>()) || w.get<double>() < 0)
+      throw Error(where + ".rgb_weight: expected a finite number >= 0");
+    const bool section_sets_it = j.contains("registration_options") && j["registration_options"].is_object() &&
+                                 j["registration_options"].contains("rgb_weight");
+    if (!section_sets_it) {
+      RegistrationOptions r = effective_registration_options(c);
+      r.set("rgb_weight", w.get<double>());
+      c.registration_options = r;
+    }
   }
   try {
     c.validate();

@@ -55,14 +55,9 @@ struct PipelineConfig {
   // ATE 1.87 cm at 2.9 fps from level 1 against 2.29 cm at 1.0 fps from level 0 (bench/results/pipeline.md): the
   // full-resolution level adds cost, and with motion blur and rolling shutter no accuracy.
   int tracking_level = 1;
-  // Registration options; unset = the method's defaults (default_registration_options) with rgb_weight below.
+  // Registration options; unset = pipeline_registration_options(registration). Every registration knob lives
+  // here, once (the JSON section "registration_options"); a former top-level "rgb_weight" is read into it.
   std::optional<RegistrationOptions> registration_options;
-  // lambda of eq. 48 when registration_options is unset, measured in this pipeline (frame-to-model ICP rows,
-  // frame-to-frame photometric rows) on TUM fr1/rpy, 150 frames, 320x240 tracking: ATE 3.06 cm at 0.1, 1.87 cm at
-  // 0.4, 2.14 cm at 1.0 (bench/results/pipeline.md). The registration's own default (0.1) is the optimum of the
-  // frame-to-frame sweep, where the ICP reference is as sharp as the frame; the fused model's smoother geometry
-  // shifts the balance towards the photometric rows.
-  float rgb_weight = 0.4f;
   // Motion prior: the initial guess of T_ref_cur is the last inter-frame motion (constant velocity) when true, the
   // identity (KinectFusion) when false. Never used right after a lost frame.
   bool constant_velocity = true;
@@ -101,7 +96,16 @@ PipelineConfig load_config(const std::string& path);
 PipelineConfig parse_config(const std::string& text, const std::string& name);
 
 
-// The registration options in force: registration_options when set, else the method's defaults with rgb_weight.
+// lambda of eq. 48 (combined's rgb_weight) in this pipeline, where it differs from the registration's own default:
+// measured with frame-to-model ICP rows and frame-to-frame photometric rows on TUM fr1/rpy, 150 frames, 320x240
+// tracking: ATE 3.06 cm at 0.1, 1.87 cm at 0.4, 2.14 cm at 1.0 (bench/results/pipeline.md). The registration's 0.1
+// is the optimum of the frame-to-frame sweep, where the ICP reference is as sharp as the frame; the fused model's
+// smoother geometry shifts the balance towards the photometric rows.
+inline constexpr double kPipelineRgbWeight = 0.4;
+
+// A method's options as the pipeline runs it: its defaults, with rgb_weight = kPipelineRgbWeight where it has one.
+RegistrationOptions pipeline_registration_options(const std::string& method);
+// The registration options in force: registration_options when set, else pipeline_registration_options().
 RegistrationOptions effective_registration_options(const PipelineConfig& config);
 
 }  // namespace hf::slam

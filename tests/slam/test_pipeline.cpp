@@ -258,6 +258,25 @@ TEST(PipelineConfig, FileErrorsNameFileAndLine) {
   EXPECT_THROW(load_config((dir / "missing.json").string()), Error);
 }
 
+// rgb_weight has one home (registration_options); the former top-level key still reads, into it, and the
+// pipeline's default differs from combined's own (kPipelineRgbWeight).
+TEST(PipelineConfig, RgbWeightHasOneHome) {
+  const nlohmann::json defaults = config_to_json(PipelineConfig{});
+  EXPECT_FALSE(defaults.contains("rgb_weight"));
+  EXPECT_FLOAT_EQ(defaults["registration_options"]["rgb_weight"].get<float>(), float(kPipelineRgbWeight));
+  const PipelineConfig former = config_from_json({{"registration", "combined"}, {"rgb_weight", 0.25}}, "old.json");
+  EXPECT_FLOAT_EQ(config_to_json(former)["registration_options"]["rgb_weight"].get<float>(), 0.25f);
+  // The section's own value wins over the former top-level one.
+  const PipelineConfig both = config_from_json(
+      {{"rgb_weight", 0.25}, {"registration_options", {{"rgb_weight", 0.6}}}}, "old.json");
+  EXPECT_FLOAT_EQ(config_to_json(both)["registration_options"]["rgb_weight"].get<float>(), 0.6f);
+  EXPECT_THROW(config_from_json({{"rgb_weight", -1.0}}, "old.json"), Error);
+  EXPECT_THROW(config_from_json({{"rgb_weight", "a lot"}}, "old.json"), Error);
+  // icp has no such knob: the former key is accepted and has nothing to set.
+  EXPECT_FALSE(config_to_json(config_from_json({{"registration", "icp"}, {"rgb_weight", 0.25}}, "old.json"))
+                   ["registration_options"].contains("rgb_weight"));
+}
+
 // report.json files written before methods owned their knobs keep reading: their registration_options hold every
 // method's keys (the former RegistrationOptions' visitor, all defaults but t_dof 7 and max_dist_m 0.2), which each
 // method renames or drops by registration's rule (migrate_registration_key).
