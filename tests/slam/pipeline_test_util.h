@@ -19,13 +19,16 @@ inline datasets::SyntheticOptions half_res(const std::string& preset, int frames
   return o;
 }
 
-// A frame source that hands frames of another through a modifier (for injecting garbage).
+// A frame source that hands frames of another through a modifier (for injecting garbage); frames for which
+// `drop` says true are left out, as a frame missing from a dataset's list would be.
 class ModifiedSource : public FrameSource {
  public:
-  ModifiedSource(std::unique_ptr<FrameSource> inner, std::function<void(RgbdFrame&)> modify)
-      : inner_(std::move(inner)), modify_(std::move(modify)) {}
+  ModifiedSource(std::unique_ptr<FrameSource> inner, std::function<void(RgbdFrame&)> modify,
+                 std::function<bool(const RgbdFrame&)> drop = nullptr)
+      : inner_(std::move(inner)), modify_(std::move(modify)), drop_(std::move(drop)) {}
   FrameRead next() override {
     FrameRead r = inner_->next();
+    while (r.status == FrameStatus::ok && drop_ && drop_(r.frame)) r = inner_->next();
     if (r.status == FrameStatus::ok) modify_(r.frame);
     return r;
   }
@@ -38,6 +41,7 @@ class ModifiedSource : public FrameSource {
  private:
   std::unique_ptr<FrameSource> inner_;
   std::function<void(RgbdFrame&)> modify_;
+  std::function<bool(const RgbdFrame&)> drop_;
 };
 
 }  // namespace hf::slam::test

@@ -21,35 +21,20 @@ constexpr int kFrames = 16, kFault = 8;
 // blocks (an image of something else).
 enum class Fault { missing, black, alien };
 
-class FaultySource : public FrameSource {
- public:
-  FaultySource(std::unique_ptr<FrameSource> inner, Fault fault) : inner_(std::move(inner)), fault_(fault) {}
-  FrameRead next() override {
-    FrameRead r = inner_->next();
-    if (r.status != FrameStatus::ok || r.frame.index != size_t(kFault)) return r;
-    if (fault_ == Fault::missing) return inner_->next();
-    ColorImage& c = r.frame.color;
-    for (int y = 0; y < c.height(); ++y)
-      for (int x = 0; x < c.width(); ++x) {
-        if (fault_ == Fault::black) {
-          c(x, y) = Rgb8{};
-        } else {
-          std::mt19937 block(unsigned((y / 16) * 1000 + x / 16));
-          c(x, y) = Rgb8{std::uint8_t(block()), std::uint8_t(block()), std::uint8_t(block())};
-        }
+std::unique_ptr<FrameSource> faulty(const std::string& dir, Fault fault) {
+  auto modify = [fault](RgbdFrame& f) {
+    if (f.index != size_t(kFault) || fault == Fault::missing) return;
+    for (int y = 0; y < f.color.height(); ++y)
+      for (int x = 0; x < f.color.width(); ++x) {
+        std::mt19937 block(unsigned((y / 16) * 1000 + x / 16));
+        f.color(x, y) = fault == Fault::black
+                            ? Rgb8{}
+                            : Rgb8{std::uint8_t(block()), std::uint8_t(block()), std::uint8_t(block())};
       }
-    return r;
-  }
-  const PinholeCamera& camera() const override { return inner_->camera(); }
-  const std::string& camera_origin() const override { return inner_->camera_origin(); }
-  size_t size() const override { return inner_->size(); }
-  const std::string& name() const override { return inner_->name(); }
-  const Trajectory& ground_truth() const override { return inner_->ground_truth(); }
-
- private:
-  std::unique_ptr<FrameSource> inner_;
-  Fault fault_;
-};
+  };
+  auto drop = [fault](const RgbdFrame& f) { return fault == Fault::missing && f.index == size_t(kFault); };
+  return std::make_unique<test::ModifiedSource>(open_dataset(dir), modify, drop);
+}
 
 TEST(RealFaults, CostAtMostTheFaultyFrameForEveryRegistration) {
   const std::string dir = std::string(HF_SHARED_DIR) + "/data/tum_fr1_rpy_first150";
@@ -57,7 +42,8 @@ TEST(RealFaults, CostAtMostTheFaultyFrameForEveryRegistration) {
   for (const std::string& method : registration_names()) {
     for (Fault fault : {Fault::missing, Fault::black, Fault::alien}) {
       SCOPED_TRACE(method + ", fault " + std::to_string(int(fault)));
-      FaultySource source(open_dataset(dir), fault);
+      const std::unique_ptr<FrameSource> faulty_source = faulty(dir, fault);
+      FrameSource& source = *faulty_source;
       PipelineConfig c;
       c.registration = method;
       c.volume.capacity_blocks = 1 << 16;
