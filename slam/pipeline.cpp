@@ -207,6 +207,13 @@ FramePyramid Pipeline::preprocess(const RgbdFrame& frame, FrameResult* r) const 
 // Mid-sequence the pose stays where tracking left it: ground truth only ever places the very first frame.
 void Pipeline::initialise(const RgbdFrame& frame, FramePyramid& current, FrameResult* r) {
   const SE3 T0 = T_world_cur_ ? *T_world_cur_ : frame.T_world_camera_gt.value_or(SE3());
+  bool any_depth = false;
+  for (const hf_float4& v : current.levels[0].vertices.pixels()) any_depth = any_depth || v.w != 0.0f;
+  if (!any_depth) {  // nothing to fuse: the frame is lost without touching the map
+    lose(r, "no surface seen yet: the map cannot be initialised from this frame (no valid depth)");
+    r->T_world_camera = T0;
+    return;
+  }
   integrate(frame, T0, r);
   raycast_reference(current, T0, true, r);
   if (!reference_->valid) {

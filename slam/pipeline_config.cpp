@@ -47,7 +47,8 @@ struct FromJson {
     auto it = j->find(key);
     if (it == j->end()) return;
     ++used;
-    const std::string name = where + "." + key;
+    // "x.json: constant_velocity" at the top level, "x.json: volume.voxel_m" in a section.
+    const std::string name = where + (where.find(": ") == std::string::npos ? ": " : ".") + key;
     if constexpr (std::is_same_v<T, RobustKernel>) {
       if (!it->is_string()) throw Error(name + ": expected a string (none, huber, student_t)");
       const std::string s = it->get<std::string>();
@@ -81,6 +82,9 @@ struct FromJson {
         ok = v >= static_cast<long long>(std::numeric_limits<T>::min()) &&
              (v < 0 || static_cast<unsigned long long>(v) <= static_cast<unsigned long long>(std::numeric_limits<T>::max()));
       }
+      // The field's own range is validate()'s to state (e.g. capacity_blocks in [1, 2^26]); this only keeps the
+      // conversion defined, so a 64-bit field says nothing about its type's range.
+      if (!ok && sizeof(T) >= 8) throw Error(name + ": expected an integer, got one out of range");
       if (!ok) throw Error(name + ": expected an integer in [" + std::to_string(std::numeric_limits<T>::min()) + ", " +
                            std::to_string(std::numeric_limits<T>::max()) + "]");
       value = it->get<T>();

@@ -168,6 +168,8 @@ TEST(Pipeline, FirstFramesWithoutDepthDoNotInitialise) {
   ASSERT_EQ(run.frames.size(), 8u);
   EXPECT_EQ(run.frames[0].state, TrackState::lost);
   EXPECT_EQ(run.frames[1].state, TrackState::lost);
+  EXPECT_FALSE(run.frames[0].integrated);  // reported honestly (issue 14): nothing was fused
+  EXPECT_FALSE(run.frames[1].integrated);
   EXPECT_EQ(run.frames[2].state, TrackState::initialised);
   EXPECT_EQ(run.frames[3].state, TrackState::tracked);
 }
@@ -236,7 +238,14 @@ TEST(PipelineConfig, JsonRoundTripAndErrors) {
   EXPECT_NE(error_of({{"voxel", 0.01}}).find("cfg.json: unknown key 'voxel'"), std::string::npos);
   EXPECT_NE(error_of({{"volume", {{"voxel_m", "big"}}}}).find("voxel_m: expected a number"), std::string::npos);
   EXPECT_NE(error_of({{"volume", {{"voxel_m", -1.0}}}}).find("cfg.json"), std::string::npos);
-  EXPECT_NE(error_of({{"registration", "nope"}}).find("unknown registration method 'nope'"), std::string::npos);
+  EXPECT_NE(error_of({{"registration", "nope"}}).find("cfg.json: unknown registration method 'nope'"),
+            std::string::npos);
+  EXPECT_NE(error_of({{"constant_velocity", 3}}).find("cfg.json: constant_velocity: expected true or false"),
+            std::string::npos);
+  const std::string capacity = error_of({{"volume", {{"capacity_blocks", -5}}}});
+  EXPECT_NE(capacity.find("cfg.json: volume.capacity_blocks: expected an integer, got one out of range"),
+            std::string::npos) << capacity;
+  EXPECT_EQ(capacity.find("18446744073709551615"), std::string::npos) << capacity;
   EXPECT_NE(error_of({{"registration_options", {{"robust_icp", "cauchy"}}}}).find("unknown robust kernel"),
             std::string::npos);
 }
