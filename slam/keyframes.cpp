@@ -41,7 +41,7 @@ bool KeyframeMap::wants_keyframe(const SE3& T_world_camera, size_t frame_index) 
   const Keyframe& last = keyframes_.back();
   if (frame_index >= last.frame_index + size_t(options_.max_frames_between)) return true;
   const SE3 T_last_cur = last.T_world_camera.inverse() * T_world_camera;
-  const double angle_deg = so3_log(T_last_cur.rotation()).norm() * 180.0 / M_PI;
+  const double angle_deg = T_last_cur.angle_rad() * 180.0 / M_PI;
   return T_last_cur.translation().norm() > options_.min_translation_m || angle_deg > options_.min_rotation_deg;
 }
 
@@ -96,6 +96,12 @@ void CompressedRgbd::clear() {
 
 size_t KeyframeMap::add(size_t frame_index, double timestamp_s, const SE3& T_world_camera,
                         const Matrix6d& information, const DepthImage& depth, const ColorImage& colour) {
+  return add(frame_index, timestamp_s, T_world_camera, information,
+             CompressedRgbd::encode(depth, colour, options_.jpeg_quality));
+}
+
+size_t KeyframeMap::add(size_t frame_index, double timestamp_s, const SE3& T_world_camera,
+                        const Matrix6d& information, CompressedRgbd images) {
   Keyframe k;
   k.id = keyframes_.size();
   k.frame_index = frame_index;
@@ -106,7 +112,7 @@ size_t KeyframeMap::add(size_t frame_index, double timestamp_s, const SE3& T_wor
     k.path_m = keyframes_.back().path_m + k.T_previous_this.translation().norm();
   }
   k.information = information;
-  k.images = CompressedRgbd::encode(depth, colour, options_.jpeg_quality);
+  k.images = std::move(images);
   bytes_ += k.images.bytes();
   keyframes_.push_back(std::move(k));
   // Over the budget: the oldest keyframes give up their images first (never the newest one).

@@ -72,6 +72,9 @@ class KeyframeMap {
   // Stores a keyframe; colour may be empty. Returns its id.
   size_t add(size_t frame_index, double timestamp_s, const SE3& T_world_camera, const Matrix6d& information,
              const DepthImage& depth, const ColorImage& colour);
+  // The same with the images already compressed (options' jpeg_quality is then the caller's business).
+  size_t add(size_t frame_index, double timestamp_s, const SE3& T_world_camera, const Matrix6d& information,
+             CompressedRgbd images);
 
   size_t size() const { return keyframes_.size(); }
   bool empty() const { return keyframes_.empty(); }

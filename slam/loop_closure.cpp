@@ -32,7 +32,7 @@ std::vector<size_t> loop_candidates(const KeyframeMap& keyframes, size_t k,
     if (!keyframes.has_images(m.id)) continue;
     if (keyframes[k].path_m - keyframes[m.id].path_m < options.min_path_m) continue;
     const SE3 T_c_k = keyframes[m.id].T_world_camera.inverse() * T_world_k;
-    const double angle_deg = so3_log(T_c_k.rotation()).norm() * 180.0 / M_PI;
+    const double angle_deg = T_c_k.angle_rad() * 180.0 / M_PI;
     if (T_c_k.translation().norm() > options.max_distance_m || angle_deg > options.max_angle_deg) continue;
     out.push_back(m.id);
     if (out.size() >= size_t(options.candidates)) break;

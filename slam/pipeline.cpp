@@ -58,7 +58,6 @@ DepthImage depth_of(const VertexMap& v) {
   return d;
 }
 
-double rotation_deg(const SE3& T) { return so3_log(T.rotation()).norm() * 180.0 / M_PI; }
 
 }  // namespace
 
@@ -180,13 +179,7 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
   T_world_cur_ = v.T_world_cur;
   last_time_s_ = frame.timestamp_s;
   lost_spell_ = 0;
-  if (r.integrated) {
-    add_keyframe_if_due(frame, &r);
-    if (config_.reintegration.enabled) {
-      const size_t k = keyframes_.size() - 1;
-      fused_.add(frame.index, k, keyframes_[k].T_world_camera, r.T_world_camera, frame.depth, frame.color);
-    }
-  }
+  if (r.integrated) keep_frame(frame, &r);
   if (r.keyframe) close_loops(frame, &r);
   reintegrate(&r);
   record_anchor(r);
@@ -228,11 +221,7 @@ void Pipeline::initialise(const RgbdFrame& frame, FramePyramid& current, FrameRe
   last_time_s_ = frame.timestamp_s;
   velocity_ = SE3();
   lost_spell_ = 0;
-  add_keyframe_if_due(frame, r);
-  if (config_.reintegration.enabled && !keyframes_.empty()) {
-    const size_t k = keyframes_.size() - 1;
-    fused_.add(frame.index, k, keyframes_[k].T_world_camera, T0, frame.depth, frame.color);
-  }
+  keep_frame(frame, r);
 }
 
 Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_s, FrameResult* r) {
@@ -273,7 +262,7 @@ Pipeline::Verdict Pipeline::decide(const RegistrationResult& reg, const FramePyr
   double dt = timestamp_s - last_time_s_;
   if (!(dt > 1e-6)) dt = 1.0 / 30.0;
   const double speed = reg.T_ref_cur.translation().norm() / dt;
-  const double angular = rotation_deg(reg.T_ref_cur) / dt;
+  const double angular = (reg.T_ref_cur.angle_rad() * 180.0 / M_PI) / dt;
   if (speed > config_.max_speed_m_per_s) {
     v.why = "implausible motion: " + std::to_string(speed) + " m/s > max_speed_m_per_s " +
             std::to_string(config_.max_speed_m_per_s);
@@ -502,13 +491,24 @@ void Pipeline::raycast_reference(FramePyramid& current, const SE3& T_world_cur, 
   r->ms.raycast = ms_since(t0);
 }
 
-void Pipeline::add_keyframe_if_due(const RgbdFrame& frame, FrameResult* r) {
-  if (!keyframes_.wants_keyframe(r->T_world_camera, frame.index)) return;
+// An integrated frame is compressed once, for the re-fusion store and, when it is due, as a keyframe (which is
+// then the anchor it is stored with).
+void Pipeline::keep_frame(const RgbdFrame& frame, FrameResult* r) {
+  const bool keyframe = keyframes_.wants_keyframe(r->T_world_camera, frame.index);
+  if (!keyframe && !config_.reintegration.enabled) return;
   const auto t0 = std::chrono::steady_clock::now();
-  const Matrix6d info = r->registration ? r->registration->information : Matrix6d::Zero();
-  const size_t id = keyframes_.add(frame.index, frame.timestamp_s, r->T_world_camera, info, frame.depth, frame.color);
-  if (appearance_) appearance_->add(id, frame.color, frame.depth);
-  r->keyframe = true;
+  CompressedRgbd images = CompressedRgbd::encode(frame.depth, frame.color, config_.keyframes.jpeg_quality);
+  if (keyframe) {
+    const Matrix6d info = r->registration ? r->registration->information : Matrix6d::Zero();
+    const size_t id = keyframes_.add(frame.index, frame.timestamp_s, r->T_world_camera, info,
+                                     config_.reintegration.enabled ? images : std::move(images));
+    if (appearance_) appearance_->add(id, frame.color, frame.depth);
+    r->keyframe = true;
+  }
+  if (config_.reintegration.enabled && !keyframes_.empty()) {
+    const size_t k = keyframes_.size() - 1;
+    fused_.add(frame.index, k, keyframes_[k].T_world_camera, r->T_world_camera, std::move(images));
+  }
   r->ms.keyframe = ms_since(t0);
 }
 

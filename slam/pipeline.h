@@ -18,8 +18,9 @@
 //                keyframes its appearance retrieves (slam/appearance.h) and the best is verified against the map.
 //   integrate    fuse the frame into the TSDF at its pose (integrate verdicts only).
 //   raycast      the model maps at the new pose: the next frame's reference.
-//   keyframe     a tracked, integrated frame that moved far enough from the last keyframe becomes one
-//                (slam/keyframes.h) and is added to the appearance index.
+//   keyframe     an integrated frame is compressed once (slam/keyframes.h CompressedRgbd) and kept for re-fusion
+//                (slam/reintegration.h); one that moved far enough from the last keyframe becomes a keyframe and
+//                is added to the appearance index.
 //   close_loops  for a new keyframe: loop candidates by appearance and pose proximity, verified by registration
 //                (icp from the poses' relative guess, then inlier ratio and depth agreement); a verified loop
 //                joins the keyframe pose graph, which Ceres solves within loop_closure.time_budget_ms
@@ -162,7 +163,7 @@ class Pipeline {
   std::optional<Verdict> relocalise(const RgbdFrame& frame, const FramePyramid& current, FrameResult* r);
   void integrate(const RgbdFrame& frame, const SE3& T_world_cur, FrameResult* r);
   void raycast_reference(FramePyramid& current, const SE3& T_world_cur, bool integrated, FrameResult* r);
-  void add_keyframe_if_due(const RgbdFrame& frame, FrameResult* r);
+  void keep_frame(const RgbdFrame& frame, FrameResult* r);
   void close_loops(const RgbdFrame& frame, FrameResult* r);
   bool apply_graph(const PoseGraphOptions& options);
   void reintegrate(FrameResult* r);

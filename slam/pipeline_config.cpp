@@ -170,7 +170,6 @@ void visit(V&& v, ReintegrationOptions& o) {
   v("min_rotation_deg", o.min_rotation_deg);
   v("frames_per_step", o.frames_per_step);
   v("memory_budget_mb", o.memory_budget_mb);
-  v("jpeg_quality", o.jpeg_quality);
 }
 template <class V>
 void visit_scalars(V&& v, PipelineConfig& c) {

@@ -17,19 +17,18 @@ void ReintegrationOptions::validate() const {
   if (frames_per_step < 0 || frames_per_step > 1000) throw Error("reintegration.frames_per_step must be in [0, 1000]");
   if (!(memory_budget_mb >= 0) || !std::isfinite(memory_budget_mb))
     throw Error("reintegration.memory_budget_mb must be >= 0");
-  if (jpeg_quality < 1 || jpeg_quality > 100) throw Error("reintegration.jpeg_quality must be in [1, 100]");
 }
 
 FusedFrames::FusedFrames(const ReintegrationOptions& options) : options_(options) { options_.validate(); }
 
 void FusedFrames::add(size_t frame_index, size_t keyframe, const SE3& T_world_keyframe, const SE3& T_world_frame,
-                      const DepthImage& depth, const ColorImage& colour) {
+                      CompressedRgbd images) {
   Frame f;
   f.frame_index = frame_index;
   f.keyframe = keyframe;
   f.T_keyframe_frame = T_world_keyframe.inverse() * T_world_frame;
   f.T_world_fused = T_world_frame;
-  f.images = CompressedRgbd::encode(depth, colour, options_.jpeg_quality);
+  f.images = std::move(images);
   bytes_ += f.images.bytes();
   frames_.push_back(std::move(f));
   const double budget = options_.memory_budget_mb * 1024.0 * 1024.0;
@@ -50,7 +49,7 @@ void FusedFrames::schedule(const KeyframeMap& keyframes) {
     if (f.images.empty() || f.keyframe >= keyframes.size()) continue;
     const SE3 d = f.T_world_fused.inverse() * anchored_pose(f, keyframes);
     const double t_m = d.translation().norm();
-    const double r_deg = so3_log(d.rotation()).norm() * 180.0 / M_PI;
+    const double r_deg = d.angle_rad() * 180.0 / M_PI;
     if (t_m <= options_.min_translation_m && r_deg <= options_.min_rotation_deg) continue;
     // One scale for both: a degree moves a point 2 m away by ~3.5 cm.
     moved.emplace_back(t_m + 0.035 * r_deg, i);

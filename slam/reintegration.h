@@ -6,7 +6,7 @@
 // most-changed first, frames_per_step of them per processed frame so that tracking never stalls.
 //
 //   FusedFrames fused(options);
-//   fused.add(index, keyframe, T_world_keyframe, T_world_frame, depth, colour);   // after each integrate()
+//   fused.add(index, keyframe, T_world_keyframe, T_world_frame, images);   // after each integrate()
 //   fused.schedule(keyframes);                                  // after a loop closure moved keyframes
 //   fused.step(options.frames_per_step, grid, camera, params, &store);           // once per processed frame
 //   fused.refuse_all(keyframes, grid, camera, params, &store);  // --global: the whole map from the final poses
@@ -34,8 +34,7 @@ struct ReintegrationOptions {
   double min_translation_m = 0.005;  // a frame moved by more than this (or the rotation) is re-fused
   double min_rotation_deg = 0.5;
   int frames_per_step = 2;           // re-fusions per processed frame (~10 ms each at 640x480 on 2 cores)
-  double memory_budget_mb = 2048.0;  // compressed images of every fused frame
-  int jpeg_quality = 90;
+  double memory_budget_mb = 2048.0;  // compressed images of every fused frame (keyframes.jpeg_quality for colour)
 
   void validate() const;  // hf::Error naming the bad field
 };
@@ -44,8 +43,9 @@ class FusedFrames {
  public:
   explicit FusedFrames(const ReintegrationOptions& options = {});
 
+  // `images` as the frame was fused (the pipeline compresses each frame once, for this store and the keyframes).
   void add(size_t frame_index, size_t keyframe, const SE3& T_world_keyframe, const SE3& T_world_frame,
-           const DepthImage& depth, const ColorImage& colour);
+           CompressedRgbd images);
   // Queues the frames whose anchored pose moved past the thresholds since they were fused, most-changed first.
   void schedule(const KeyframeMap& keyframes);
   // Re-fuses up to n queued frames at their anchored poses; returns how many were re-fused.

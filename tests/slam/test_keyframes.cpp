@@ -150,7 +150,7 @@ TEST(FusedFrames, MovedFramesAreReFusedMostChangedFirst) {
   FusedFrames fused;
   for (size_t k = 0; k < 2; ++k) {
     fusion::integrate(grid, wall, {}, cam, keys[k].T_world_camera);
-    fused.add(k, k, keys[k].T_world_camera, keys[k].T_world_camera, wall, {});
+    fused.add(k, k, keys[k].T_world_camera, keys[k].T_world_camera, CompressedRgbd::encode(wall, {}, 90));
   }
   fused.schedule(keys);
   EXPECT_EQ(fused.pending(), 0u);  // nothing moved
