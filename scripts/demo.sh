@@ -4,6 +4,7 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 bash scripts/setup.sh
-bash scripts/build.sh release
+# Only what the demo runs: the CLI (the test command builds the rest into the same folder).
+bash scripts/build.sh release hashfusion
 out="${HF_DEMO_OUT:-$PWD/out/demo}"
 ./build/release/apps/hashfusion run --input synthetic:room --out "$out" "$@"
