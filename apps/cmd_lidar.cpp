@@ -74,6 +74,50 @@ void write_outputs(const LidarArgs& a, lidar::Report& report, const lidar::Built
   std::cout << lidar::report_markdown(report) << "\noutputs in " << a.out << "\n";
 }
 
+// The merge of a tiled run, streamed (lidar/tiling.h): bands of rows go straight into classes.png, classes.tif
+// and buildings.png (and into the footprint comparison), so the whole grid is never in memory.
+void run_merge(const LidarArgs& a, const lidar::BuiltUpOptions& o, lidar::Report& report) {
+  std::vector<std::string> paths;
+  for (const auto& e : std::filesystem::directory_iterator(a.merge))
+    if (e.path().extension() == ".hflt") paths.push_back(e.path().string());
+  if (paths.empty()) throw Error(a.merge + ": no tile_*.hflt files");
+  std::sort(paths.begin(), paths.end());
+  const lidar::TileResult first = lidar::read_tile_header(paths[0]);
+  const lidar::Grid grid = first.grid;
+  report.options.t_s = first.t_s, report.options.cell_m = first.cell_m;
+  report.tiles = std::to_string(paths.size()) + " tiles";
+  report.epsg = a.epsg;
+  report.inputs = {a.merge};
+  std::vector<lidar::Polygon> polygons;
+  if (!a.footprints.empty()) polygons = lidar::read_footprints(a.footprints, a.footprint_layer, &grid);
+  std::int64_t tp = 0, fp = 0, fn = 0;
+  lidar::MergeSummary summary;
+  write_path_atomically(a.out + "/classes.png", [&](const std::string& png_tmp) {
+    write_path_atomically(a.out + "/classes.tif", [&](const std::string& tif_tmp) {
+      write_path_atomically(a.out + "/buildings.png", [&](const std::string& mask_tmp) {
+        lidar::ClassPngWriter png(png_tmp, grid.width, grid.height);
+        lidar::ClassGeoTiffWriter tif(tif_tmp, grid, report.epsg);
+        lidar::MaskPngWriter mask(mask_tmp, grid.width, grid.height);
+        summary = lidar::merge_tile_files(paths, o.areas, [&](int row0, const Image<std::uint8_t>& classes, const lidar::Mask& s) {
+          png.rows(classes), tif.rows(classes);
+          if (a.footprints.empty()) return mask.rows(s);
+          const lidar::Mask truth = lidar::rasterise_footprints(polygons, grid, row0, s.height());
+          const lidar::Mask coverage = lidar::rasterise_coverage(polygons, grid, row0, s.height());
+          const lidar::Scores band = lidar::compare_masks(s, truth, &coverage);
+          tp += band.tp, fp += band.fp, fn += band.fn;
+          mask.rows(s, &truth);
+        });
+        png.close(), tif.close(), mask.close();
+      });
+    });
+  });
+  if (!a.footprints.empty()) report.building_mask = lidar::scores_from_counts(tp, fp, fn);
+  const lidar::BuiltUpRaster stats{summary.grid, {}, {}, summary.stats};
+  report.raster = &stats;
+  lidar::write_report(a.out, report);
+  std::cout << lidar::report_markdown(report) << "\noutputs in " << a.out << "\n";
+}
+
 void run_lidar(LidarArgs a) {
   prepare_output_folder(a.out);
   lidar::BuiltUpOptions o = options_of(a);
@@ -98,22 +142,7 @@ void run_lidar(LidarArgs a) {
 
   lidar::Grid grid;
   if (!a.merge.empty()) {
-    std::vector<lidar::TileResult> tiles;
-    for (const auto& e : std::filesystem::directory_iterator(a.merge))
-      if (e.path().extension() == ".hflt") tiles.push_back(lidar::read_tile(e.path().string()));
-    if (tiles.empty()) throw Error(a.merge + ": no tile_*.hflt files");
-    std::sort(tiles.begin(), tiles.end(), [](const auto& x, const auto& y) { return x.tile < y.tile; });
-    report.options.t_s = tiles[0].t_s, report.options.cell_m = tiles[0].cell_m;
-    report.tiles = std::to_string(tiles.size()) + " tiles";
-    report.epsg = a.epsg;
-    report.inputs = {a.merge};
-    const lidar::BuiltUpRaster merged = lidar::merge_tiles(tiles, o.areas);
-    std::optional<lidar::Mask> truth, coverage;
-    if (!a.footprints.empty()) {
-      const auto polygons = lidar::read_footprints(a.footprints, a.footprint_layer, &merged.grid);
-      truth = lidar::rasterise_footprints(polygons, merged.grid), coverage = lidar::rasterise_coverage(polygons, merged.grid);
-    }
-    write_outputs(a, report, merged, truth ? &*truth : nullptr, coverage ? &*coverage : nullptr);
+    run_merge(a, o, report);
     return;
   }
 

@@ -58,8 +58,10 @@ std::vector<Polygon> read_footprints(const std::string& path, const std::string&
   return out;
 }
 
-Mask rasterise_footprints(const std::vector<Polygon>& polygons, const Grid& grid) {
-  Mask out(grid.width, grid.height, 0);
+Mask rasterise_footprints(const std::vector<Polygon>& polygons, const Grid& grid) { return rasterise_footprints(polygons, grid, 0, grid.height); }
+
+Mask rasterise_footprints(const std::vector<Polygon>& polygons, const Grid& grid, int first_row, int rows) {
+  Mask out(grid.width, rows, 0);
   const double r = grid.cell_m;
   std::vector<double> crossings;
   for (const Polygon& p : polygons) {
@@ -67,8 +69,8 @@ Mask rasterise_footprints(const std::vector<Polygon>& polygons, const Grid& grid
     for (const Ring& ring : p.rings)
       for (const auto& v : ring) lo = std::min(lo, v[1]), hi = std::max(hi, v[1]);
     // Rows whose centre y = north - (row + 0.5) r lies in [lo, hi].
-    const int row0 = std::max(0, static_cast<int>(std::floor((grid.north() - hi) / r - 0.5)));
-    const int row1 = std::min(grid.height - 1, static_cast<int>(std::ceil((grid.north() - lo) / r - 0.5)));
+    const int row0 = std::max(first_row, static_cast<int>(std::floor((grid.north() - hi) / r - 0.5)));
+    const int row1 = std::min(first_row + rows - 1, static_cast<int>(std::ceil((grid.north() - lo) / r - 0.5)));
     for (int row = row0; row <= row1; ++row) {
       const double y = grid.north() - (row + 0.5) * r;
       crossings.clear();
@@ -84,26 +86,28 @@ Mask rasterise_footprints(const std::vector<Polygon>& polygons, const Grid& grid
         // Columns whose centre x = west + (col + 0.5) r lies in [x0, x1).
         const double c0 = std::ceil((crossings[i] - grid.west()) / r - 0.5);
         const double c1 = std::ceil((crossings[i + 1] - grid.west()) / r - 0.5) - 1;
-        for (double c = std::max(0.0, c0); c <= std::min(double(grid.width - 1), c1); ++c) out(static_cast<int>(c), row) = 1;
+        for (double c = std::max(0.0, c0); c <= std::min(double(grid.width - 1), c1); ++c) out(static_cast<int>(c), row - first_row) = 1;
       }
     }
   }
   return out;
 }
 
-Mask rasterise_coverage(const std::vector<Polygon>& polygons, const Grid& grid) {
+Mask rasterise_coverage(const std::vector<Polygon>& polygons, const Grid& grid) { return rasterise_coverage(polygons, grid, 0, grid.height); }
+
+Mask rasterise_coverage(const std::vector<Polygon>& polygons, const Grid& grid, int first_row, int rows) {
   double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
   for (const Polygon& p : polygons)
     for (const Ring& ring : p.rings)
       for (const auto& v : ring)
         for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
-  Mask out(grid.width, grid.height, 0);
-  for (int row = 0; row < grid.height; ++row) {
+  Mask out(grid.width, rows, 0);
+  for (int row = first_row; row < first_row + rows; ++row) {
     const double y = grid.north() - (row + 0.5) * grid.cell_m;
     if (y < lo[1] || y > hi[1]) continue;
     for (int col = 0; col < grid.width; ++col) {
       const double x = grid.west() + (col + 0.5) * grid.cell_m;
-      if (x >= lo[0] && x <= hi[0]) out(col, row) = 1;
+      if (x >= lo[0] && x <= hi[0]) out(col, row - first_row) = 1;
     }
   }
   return out;

@@ -25,10 +25,13 @@ std::vector<Polygon> read_footprints(const std::string& path, const std::string&
 
 // The cells of `grid` whose centre lies inside some polygon (even-odd over each polygon's rings).
 Mask rasterise_footprints(const std::vector<Polygon>& polygons, const Grid& grid);
+// Rows [first_row, first_row + rows) of the same (a band, for the streaming merge: the same cells bit for bit).
+Mask rasterise_footprints(const std::vector<Polygon>& polygons, const Grid& grid, int first_row, int rows);
 
 // Where the footprints say anything: the cells whose centre lies in the bounding box of all polygons. A cadastral
 // extract cropped to a survey rarely covers the whole point cloud, and outside its extent a missing footprint
 // is no evidence; validation counts only these cells.
 Mask rasterise_coverage(const std::vector<Polygon>& polygons, const Grid& grid);
+Mask rasterise_coverage(const std::vector<Polygon>& polygons, const Grid& grid, int first_row, int rows);
 
 }  // namespace hf::lidar

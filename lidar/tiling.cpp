@@ -153,14 +153,13 @@ void write_tile(const std::string& path, const TileResult& t) {
       true);
 }
 
-TileResult read_tile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot open tile file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  const std::string bytes = ss.str();
-  Reader r{path, bytes};
-  if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0) r.fail(0, "not a hashfusion lidar tile (no HFLTILE1 magic)");
+namespace {
+
+constexpr size_t kHeaderBytes = 80;  // magic .. the two label counts
+
+// The fixed header (through the label counts); `clusters` gets the cluster count.
+TileResult parse_header(Reader& r, std::int32_t& clusters) {
+  if (r.bytes.size() < 8 || std::memcmp(r.bytes.data(), kMagic, 8) != 0) r.fail(0, "not a hashfusion lidar tile (no HFLTILE1 magic)");
   r.at = 8;
   if (r.get<std::uint32_t>("byte-order mark") != kByteOrder) r.fail(8, "written on a machine of the other byte order");
   TileResult t;
@@ -176,10 +175,38 @@ TileResult read_tile(const std::string& path) {
       t.core.row + std::int64_t(t.core.height) > t.grid.height || !std::isfinite(t.t_s))
     r.fail(12, "grid or core rectangle is not valid");
   t.buildings = r.get<std::int32_t>("label counts");
-  const std::int32_t clusters = r.get<std::int32_t>("label counts");
+  clusters = r.get<std::int32_t>("label counts");
   const std::uint64_t cells = std::uint64_t(t.core.width) * t.core.height;
   if (t.buildings < 0 || clusters < 0 || std::uint64_t(t.buildings) > cells || std::uint64_t(clusters) > cells)
     r.fail(r.at - 8, "label counts are not valid");
+  return t;
+}
+
+}  // namespace
+
+TileResult read_tile_header(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open tile file");
+  std::string bytes(kHeaderBytes, '\0');
+  in.read(bytes.data(), std::streamsize(kHeaderBytes));
+  bytes.resize(static_cast<size_t>(in.gcount()));
+  Reader r{path, bytes};
+  std::int32_t clusters = 0;
+  TileResult t = parse_header(r, clusters);
+  t.cluster_cells.assign(static_cast<size_t>(clusters), 0);
+  return t;
+}
+
+TileResult read_tile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open tile file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  const std::string bytes = ss.str();
+  Reader r{path, bytes};
+  std::int32_t clusters = 0;
+  TileResult t = parse_header(r, clusters);
+  const std::uint64_t cells = std::uint64_t(t.core.width) * t.core.height;
   if (bytes.size() - r.at != std::uint64_t(clusters) * 8 + cells * 8)
     r.fail(r.at, "file size " + std::to_string(bytes.size()) + " does not match its " + std::to_string(cells) + " cells");
   for (int i = 0; i < clusters; ++i) t.cluster_cells.push_back(r.get<std::int64_t>("cluster sizes"));
@@ -203,67 +230,184 @@ BuiltUpRaster built_up_raster(const BuiltUp& b, const Grid& grid) {
   return {grid, b.s, b.profile.classes, b.profile.stats};
 }
 
-BuiltUpRaster merge_tiles(const std::vector<TileResult>& tiles, const AreaThresholds& areas) {
+namespace {
+
+// What the merge reads of its tiles, so files and in-memory tiles share one merge: the headers (no labels; the
+// cluster count in cluster_cells.size() is enough), the whole tile for the first pass, rows of labels for the second.
+struct TileSource {
+  std::vector<TileResult> headers;
+  std::vector<std::int32_t> clusters;
+  std::vector<std::string> names;
+  std::function<TileResult(size_t)> load;
+  std::function<void(size_t, int y0, int rows, std::int32_t* building, std::int32_t* cluster)> rows;
+};
+
+// The tiles as rows of tiles (north to south; each west to east). A plan's cores share their rows within a row of
+// tiles and cover the grid exactly once; anything else is an overlap or a missing tile.
+std::vector<std::vector<size_t>> tile_layout(const TileSource& src) {
+  const Grid& grid = src.headers[0].grid;
+  std::vector<size_t> order(src.headers.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    const CellRect &x = src.headers[a].core, &y = src.headers[b].core;
+    return std::pair(x.row, x.col) < std::pair(y.row, y.col);
+  });
+  std::vector<std::vector<size_t>> rows;
+  int next_row = 0, next_col = 0, row_height = 0;
+  for (size_t k : order) {
+    const CellRect& c = src.headers[k].core;
+    if (next_col == grid.width) next_row += row_height, next_col = 0;
+    if (next_col == 0) rows.emplace_back(), row_height = c.height;
+    if (c.row != next_row || c.col != next_col || c.height != row_height)
+      throw Error("merge: " + src.names[k] + ": tiles overlap or a tile is missing (core at cell (" + std::to_string(c.col) + ", " +
+                  std::to_string(c.row) + "), expected (" + std::to_string(next_col) + ", " + std::to_string(next_row) + "))");
+    rows.back().push_back(k);
+    next_col += c.width;
+  }
+  if (next_col != grid.width || next_row + row_height != grid.height)
+    throw Error("merge: the tiles do not cover the whole grid (a tile is missing)");
+  return rows;
+}
+
+MergeSummary merge(const TileSource& src, const AreaThresholds& areas, const MergeBand& band, int band_rows) {
   validate(areas);
-  if (tiles.empty()) throw Error("merge: no tiles");
-  const Grid grid = tiles[0].grid;
-  const int w = grid.width, h = grid.height;
+  if (src.headers.empty()) throw Error("merge: no tiles");
+  if (band_rows < 1) throw Error("merge: band_rows must be positive");
+  const size_t n = src.headers.size();
+  const Grid grid = src.headers[0].grid;
+  const int w = grid.width;
   // Global ids: each tile's labels shifted past the previous tiles'.
-  std::vector<std::int64_t> building_base, cluster_base;
+  std::vector<std::int64_t> building_base(n), cluster_base(n);
   std::int64_t buildings = 0, clusters = 0;
-  for (const TileResult& t : tiles) {
-    if (t.grid != grid || t.t_s != tiles[0].t_s)
-      throw Error("merge: tile " + std::to_string(t.tile) + " was run on another grid or t^S than tile " + std::to_string(tiles[0].tile));
-    building_base.push_back(buildings), cluster_base.push_back(clusters);
-    buildings += t.buildings, clusters += std::int64_t(t.cluster_cells.size());
+  for (size_t k = 0; k < n; ++k) {
+    const TileResult& t = src.headers[k];
+    if (t.grid != grid || t.t_s != src.headers[0].t_s)
+      throw Error("merge: " + src.names[k] + " was run on another grid or t^S than " + src.names[0]);
+    building_base[k] = buildings, cluster_base[k] = clusters;
+    buildings += t.buildings, clusters += src.clusters[k];
   }
-  Image<std::int64_t> building_id(w, h, -1), cluster_id(w, h, -1);
-  Image<std::uint8_t> covered(w, h, 0);
-  for (size_t k = 0; k < tiles.size(); ++k) {
-    const TileResult& t = tiles[k];
-    for (int y = 0; y < t.core.height; ++y)
-      for (int x = 0; x < t.core.width; ++x) {
-        const int gx = t.core.col + x, gy = t.core.row + y;
-        if (covered(gx, gy)++) throw Error("merge: tiles overlap at cell (" + std::to_string(gx) + ", " + std::to_string(gy) + ")");
-        if (const int b = t.building_label(x, y); b >= 0) building_id(gx, gy) = building_base[k] + b;
-        if (const int c = t.cluster_label(x, y); c >= 0) cluster_id(gx, gy) = cluster_base[k] + c;
-      }
-  }
-  for (auto c : covered.pixels())
-    if (!c) throw Error("merge: the tiles do not cover the whole grid (a tile is missing)");
+  const std::vector<std::vector<size_t>> layout = tile_layout(src);
 
-  // Components that continue across a core border: 8-neighbours in S (resp. psi(S)) with different labels.
+  // Pass 1: components that continue across a core border (8-neighbours in S, resp. psi(S), in two tiles). Only
+  // the grid-wide row above the current row of tiles and the column left of the current tile are kept.
   UnionFind bu(buildings), cu(clusters);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 1}, {0, 1}, {1, 1}}) {
-        const int nx = x + dx, ny = y + dy;
-        if (nx < 0 || nx >= w || ny >= h) continue;
-        if (building_id(x, y) >= 0 && building_id(nx, ny) >= 0) bu.unite(building_id(x, y), building_id(nx, ny));
-        if (cluster_id(x, y) >= 0 && cluster_id(nx, ny) >= 0) cu.unite(cluster_id(x, y), cluster_id(nx, ny));
-      }
+  std::vector<std::int64_t> cells_of(static_cast<size_t>(clusters), 0);
+  std::vector<std::int64_t> above_b(w, -1), above_c(w, -1), below_b(w, -1), below_c(w, -1), left_b, left_c;
+  for (const auto& row : layout) {
+    left_b.clear(), left_c.clear();
+    for (size_t k : row) {
+      const TileResult t = src.load(k);
+      const CellRect& core = src.headers[k].core;
+      if (t.core != core || t.buildings != src.headers[k].buildings || std::int64_t(t.cluster_cells.size()) != src.clusters[k])
+        throw Error("merge: " + src.names[k] + " changed while it was merged");
+      std::copy(t.cluster_cells.begin(), t.cluster_cells.end(), cells_of.begin() + cluster_base[k]);
+      const auto gb = [&](int x, int y) { const int l = t.building_label(x, y); return l < 0 ? -1 : building_base[k] + l; };
+      const auto gc = [&](int x, int y) { const int l = t.cluster_label(x, y); return l < 0 ? -1 : cluster_base[k] + l; };
+      const auto join = [](UnionFind& u, std::int64_t a, std::int64_t b) {
+        if (a >= 0 && b >= 0) u.unite(a, b);
+      };
+      if (core.row > 0)
+        for (int x = 0; x < core.width; ++x)
+          for (int dx = -1; dx <= 1; ++dx)
+            if (const int gx = core.col + x + dx; gx >= 0 && gx < w) join(bu, gb(x, 0), above_b[gx]), join(cu, gc(x, 0), above_c[gx]);
+      if (!left_b.empty())
+        for (int y = 0; y < core.height; ++y)
+          for (int dy = -1; dy <= 1; ++dy)
+            if (const int yy = y + dy; yy >= 0 && yy < core.height) join(bu, gb(0, y), left_b[yy]), join(cu, gc(0, y), left_c[yy]);
+      left_b.resize(core.height), left_c.resize(core.height);
+      for (int y = 0; y < core.height; ++y) left_b[y] = gb(core.width - 1, y), left_c[y] = gc(core.width - 1, y);
+      for (int x = 0; x < core.width; ++x) below_b[core.col + x] = gb(x, core.height - 1), below_c[core.col + x] = gc(x, core.height - 1);
+    }
+    std::swap(above_b, below_b), std::swap(above_c, below_c);
+  }
   std::vector<std::int64_t> root_cells(static_cast<size_t>(clusters), 0);
-  for (size_t k = 0; k < tiles.size(); ++k)
-    for (size_t c = 0; c < tiles[k].cluster_cells.size(); ++c) root_cells[cu.find(cluster_base[k] + std::int64_t(c))] += tiles[k].cluster_cells[c];
+  for (std::int64_t c = 0; c < clusters; ++c) root_cells[cu.find(c)] += cells_of[c];
+  std::vector<std::int64_t>().swap(cells_of);
 
-  BuiltUpRaster out;
-  out.grid = grid;
-  out.s = Mask(w, h, 0);
-  out.classes = Image<std::uint8_t>(w, h, 0);
+  // Pass 2: the classes, band by band, from the labels' rows.
+  MergeSummary out;
+  out.grid = grid, out.t_s = src.headers[0].t_s, out.tiles = static_cast<int>(n);
   std::vector<char> building_seen(static_cast<size_t>(buildings), 0), cluster_seen(static_cast<size_t>(clusters), 0);
-  for (size_t i = 0; i < out.s.size(); ++i) {
-    const std::int64_t b = building_id.pixels()[i];
-    if (b < 0) continue;
-    const std::int64_t root = cu.find(cluster_id.pixels()[i]);
-    const BuiltUpClass c = class_of_area(double(root_cells[root]) * grid.cell_area_m2(), areas);
-    out.s.pixels()[i] = 1;
-    out.classes.pixels()[i] = static_cast<std::uint8_t>(c);
-    ClassStatistics& st = out.stats[static_cast<int>(c) - 1];
-    ++st.cells;
-    if (char& seen = building_seen[bu.find(b)]; !seen) seen = 1, ++st.components;
-    if (char& seen = cluster_seen[root]; !seen) seen = 1, ++st.settlements;
+  std::vector<std::int32_t> b_rows, c_rows;
+  for (const auto& row : layout) {
+    const CellRect& first = src.headers[row.front()].core;
+    for (int y0 = 0; y0 < first.height; y0 += band_rows) {
+      const int rows = std::min(band_rows, first.height - y0);
+      Image<std::uint8_t> classes(w, rows, 0);
+      Mask s(w, rows, 0);
+      for (size_t k : row) {
+        const CellRect& core = src.headers[k].core;
+        b_rows.resize(size_t(core.width) * rows), c_rows.resize(b_rows.size());
+        src.rows(k, y0, rows, b_rows.data(), c_rows.data());
+        for (int y = 0; y < rows; ++y)
+          for (int x = 0; x < core.width; ++x) {
+            const std::int32_t b = b_rows[size_t(y) * core.width + x], c = c_rows[size_t(y) * core.width + x];
+            if (b < 0) continue;
+            if (b >= src.headers[k].buildings || c < 0 || c >= src.clusters[k])
+              throw Error("merge: " + src.names[k] + " changed while it was merged (label out of range)");
+            const std::int64_t root = cu.find(cluster_base[k] + c);
+            const BuiltUpClass cls = class_of_area(double(root_cells[root]) * grid.cell_area_m2(), areas);
+            s(core.col + x, y) = 1;
+            classes(core.col + x, y) = static_cast<std::uint8_t>(cls);
+            ClassStatistics& st = out.stats[static_cast<int>(cls) - 1];
+            ++st.cells;
+            if (char& seen = building_seen[bu.find(building_base[k] + b)]; !seen) seen = 1, ++st.components;
+            if (char& seen = cluster_seen[root]; !seen) seen = 1, ++st.settlements;
+          }
+      }
+      band(first.row + y0, classes, s);
+    }
   }
   return out;
+}
+
+}  // namespace
+
+BuiltUpRaster merge_tiles(const std::vector<TileResult>& tiles, const AreaThresholds& areas) {
+  TileSource src;
+  for (const TileResult& t : tiles) {
+    src.headers.push_back(t);
+    src.headers.back().building_label = {}, src.headers.back().cluster_label = {};
+    src.clusters.push_back(static_cast<std::int32_t>(t.cluster_cells.size()));
+    src.names.push_back("tile " + std::to_string(t.tile));
+  }
+  src.load = [&](size_t k) { return tiles[k]; };
+  src.rows = [&](size_t k, int y0, int rows, std::int32_t* b, std::int32_t* c) {
+    const size_t at = size_t(y0) * tiles[k].core.width, count = size_t(rows) * tiles[k].core.width;
+    std::copy_n(tiles[k].building_label.data() + at, count, b);
+    std::copy_n(tiles[k].cluster_label.data() + at, count, c);
+  };
+  BuiltUpRaster out;
+  if (!tiles.empty()) out.s = Mask(tiles[0].grid.width, tiles[0].grid.height, 0), out.classes = Image<std::uint8_t>(out.s.width(), out.s.height(), 0);
+  const MergeSummary m = merge(src, areas, [&](int row0, const Image<std::uint8_t>& classes, const Mask& s) {
+    std::copy_n(classes.data(), classes.size(), out.classes.data() + size_t(row0) * out.classes.width());
+    std::copy_n(s.data(), s.size(), out.s.data() + size_t(row0) * out.s.width());
+  }, 64);
+  out.grid = m.grid, out.stats = m.stats;
+  return out;
+}
+
+MergeSummary merge_tile_files(const std::vector<std::string>& paths, const AreaThresholds& areas, const MergeBand& band, int band_rows) {
+  TileSource src;
+  for (const std::string& path : paths) {
+    src.headers.push_back(read_tile_header(path));
+    src.clusters.push_back(static_cast<std::int32_t>(src.headers.back().cluster_cells.size()));
+    src.headers.back().cluster_cells = {};
+    src.names.push_back(path);
+  }
+  src.load = [&](size_t k) { return read_tile(paths[k]); };
+  src.rows = [&](size_t k, int y0, int rows, std::int32_t* b, std::int32_t* c) {
+    const CellRect& core = src.headers[k].core;
+    const std::uint64_t cells = std::uint64_t(core.width) * core.height, labels_at = kHeaderBytes + std::uint64_t(src.clusters[k]) * 8;
+    const std::uint64_t at = std::uint64_t(y0) * core.width * 4, bytes = std::uint64_t(rows) * core.width * 4;
+    std::ifstream in(paths[k], std::ios::binary);
+    in.seekg(std::streamoff(labels_at + at));
+    in.read(reinterpret_cast<char*>(b), std::streamsize(bytes));
+    in.seekg(std::streamoff(labels_at + cells * 4 + at));
+    in.read(reinterpret_cast<char*>(c), std::streamsize(bytes));
+    if (!in) throw Error(paths[k] + ": byte " + std::to_string(labels_at + at) + ": truncated tile file (it changed while it was merged)");
+  };
+  return merge(src, areas, band, band_rows);
 }
 
 }  // namespace hf::lidar

@@ -10,14 +10,17 @@
 // tile checks its assumptions and throws hf::Error rather than return a wrong answer: a building taller than
 // max_height_m, or one near the core that is not seen whole with its ground box.
 //
-// Limit: the merge holds the whole grid's labels and rasters in memory (about 20 bytes per cell, 8 GB for 20 x
-// 20 km at 0.5 m); a country needs the merge done band by band (union-find over the border rows only), not
-// done yet.
+// Memory: the merge streams. It reads the tiles twice, one at a time: the first pass joins labels across core
+// borders (it keeps one grid-wide row of labels above the current tile row and the column left of the current
+// tile), the second writes the classes in bands of rows across the grid's width. It holds one tile, a band, and
+// the component table (16 bytes per building and per cluster label of every tile); bench/results/lidar.md has its
+// peak RSS. Tiles must form the plan's regular layout (rows of tiles sharing their rows, covering the grid once).
 //
 // Tile files are binary (magic "HFLTILE1", host byte order with a byte-order mark; written atomically); reading
 // checks every size and label and throws hf::Error naming the file and byte offset.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -68,6 +71,8 @@ TileResult run_tile_on(const CellRaster& window_raster, const TilePlan& plan, in
 
 void write_tile(const std::string& path, const TileResult& tile);
 TileResult read_tile(const std::string& path);
+// Only the fixed header: grid, core, t^S, label counts (cluster_cells has the cluster count's size, all 0; no labels).
+TileResult read_tile_header(const std::string& path);
 
 // The classification as a raster with its statistics: what the single run and the merge both produce.
 struct BuiltUpRaster {
@@ -80,5 +85,18 @@ BuiltUpRaster built_up_raster(const BuiltUp& b, const Grid& grid);
 
 // Joins the tiles (which must share grid and t^S and cover the grid exactly once) and applies the thresholds.
 BuiltUpRaster merge_tiles(const std::vector<TileResult>& tiles, const AreaThresholds& areas);
+
+// The streaming merge of tile files (any order): calls `band(row0, classes, s)` for consecutive bands of at most
+// `band_rows` rows (full grid width) from the north edge down, and returns the grid and the statistics. Throws
+// hf::Error naming the file for a bad tile, one of another grid or t^S, or tiles that overlap or leave a gap.
+struct MergeSummary {
+  Grid grid;
+  double t_s = 0;
+  int tiles = 0;
+  std::array<ClassStatistics, kBuiltUpClasses> stats;
+};
+using MergeBand = std::function<void(int row0, const Image<std::uint8_t>& classes, const Mask& s)>;
+MergeSummary merge_tile_files(const std::vector<std::string>& paths, const AreaThresholds& areas, const MergeBand& band,
+                              int band_rows = 64);
 
 }  // namespace hf::lidar

@@ -5,7 +5,9 @@
 #include <gdal.h>
 #include <ogr_srs_api.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <fstream>
 
 #include "core/error.h"
 #include "io/image_io.h"
@@ -60,6 +62,59 @@ TEST(ClassRasterIo, GeoTiffCarriesGridCrsAndClasses) {
   EXPECT_EQ(img(4, 0), class_colour(BuiltUpClass::city));
 
   EXPECT_THROW(write_class_geotiff((dir / "no_such_folder" / "x.tif").string(), classes, grid, 28992), hf::Error);
+  std::filesystem::remove_all(dir);
+}
+
+std::string bytes_of(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+// The band writers of the streaming merge write the whole-image files byte for byte whatever the band heights
+// (GeoTIFF strips and PNG IDAT chunks are cut by the writers, not by the callers), on a raster large enough for
+// several strips and IDAT chunks; a writer closed short of its rows refuses.
+TEST(ClassRasterIo, BandWritersEqualTheWholeImageWriters) {
+  const auto dir = std::filesystem::temp_directory_path() / ("hf_lidar_bands_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const Grid grid{0.5, 170000, 895284, 613, 301};
+  Image<std::uint8_t> classes(grid.width, grid.height, 0);
+  Mask mask(grid.width, grid.height, 0), truth(grid.width, grid.height, 0);
+  std::uint32_t state = 7;
+  for (size_t i = 0; i < classes.size(); ++i) {
+    state = state * 1664525u + 1013904223u;  // noise, so the PNG needs several 64 KiB IDAT chunks
+    classes.pixels()[i] = static_cast<std::uint8_t>((state >> 24) % 5), mask.pixels()[i] = (state >> 20) & 1, truth.pixels()[i] = (state >> 21) & 1;
+  }
+  write_class_geotiff((dir / "whole.tif").string(), classes, grid, 28992);
+  write_class_png((dir / "whole.png").string(), classes);
+  write_mask_png((dir / "whole_mask.png").string(), mask, &truth);
+  ASSERT_GT(std::filesystem::file_size(dir / "whole.png"), 65536u);  // two IDAT chunks at least
+  const auto band = [](const Image<std::uint8_t>& img, int y0, int rows) {
+    Image<std::uint8_t> b(img.width(), rows);
+    std::copy_n(img.data() + size_t(y0) * img.width(), b.size(), b.data());
+    return b;
+  };
+  {
+    ClassGeoTiffWriter tif((dir / "bands.tif").string(), grid, 28992);
+    ClassPngWriter png((dir / "bands.png").string(), grid.width, grid.height);
+    MaskPngWriter m((dir / "bands_mask.png").string(), grid.width, grid.height);
+    for (int y0 = 0, k = 0; y0 < grid.height; ++k) {
+      const int rows = std::min(grid.height - y0, 1 + (k * 37) % 29);  // uneven bands, 1..29 rows
+      tif.rows(band(classes, y0, rows)), png.rows(band(classes, y0, rows));
+      const Mask t = band(truth, y0, rows);
+      m.rows(band(mask, y0, rows), &t);
+      y0 += rows;
+    }
+    tif.close(), png.close(), m.close();
+  }
+  EXPECT_EQ(bytes_of(dir / "bands.tif"), bytes_of(dir / "whole.tif"));
+  EXPECT_EQ(bytes_of(dir / "bands.png"), bytes_of(dir / "whole.png"));
+  EXPECT_EQ(bytes_of(dir / "bands_mask.png"), bytes_of(dir / "whole_mask.png"));
+  const ColorImage back = load_color((dir / "bands_mask.png").string());
+  const Rgb8 expected = mask(0, 0) && truth(0, 0) ? Rgb8{255, 255, 255} : mask(0, 0) ? Rgb8{230, 40, 40} : truth(0, 0) ? Rgb8{40, 90, 230} : Rgb8{0, 0, 0};
+  EXPECT_EQ(back(0, 0), expected);
+  ClassPngWriter short_png((dir / "short.png").string(), grid.width, grid.height);
+  short_png.rows(band(classes, 0, 10));
+  EXPECT_THROW(short_png.close(), hf::Error);
   std::filesystem::remove_all(dir);
 }
 

@@ -2,6 +2,7 @@
 // round-trip and reject corruption; a tile whose halo assumptions fail says so.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -55,6 +56,52 @@ TEST(Tiling, SplitRunsEqualTheSingleRun) {
       EXPECT_EQ(merged.stats[k].settlements, single.stats[k].settlements);
     }
   }
+}
+
+// The streaming merge of tile files (what `hashfusion lidar --merge` runs) gives the single run's raster and
+// statistics whatever the band height: one row at a time, bands that cut tile rows unevenly, one band per row of tiles.
+TEST(Tiling, StreamingFileMergeEqualsTheSingleRunInAnyBand) {
+  const SyntheticSettlements scene = synthetic_settlements({1.0, 21, 300, 0});
+  const BuiltUpOptions o = options_for(scene);
+  CellRaster whole(scene.grid);
+  whole.add(scene.points);
+  const BuiltUpRaster single = built_up_raster(classify_built_up(whole, o), scene.grid);
+  const TilePlan plan = plan_tiles(scene.grid, 5, 3, o, {10.0, 20.0});
+  const auto dir = std::filesystem::temp_directory_path() / ("hf_lidar_stream_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::vector<std::string> paths;
+  for (const TileResult& t : run_all_tiles(scene, plan, o, {10.0, 20.0})) {
+    paths.push_back((dir / ("tile_" + std::to_string(t.tile) + ".hflt")).string());
+    write_tile(paths.back(), t);
+  }
+  std::reverse(paths.begin(), paths.end());  // any order
+  for (int band_rows : {1, 7, 100000}) {
+    SCOPED_TRACE("bands of " + std::to_string(band_rows) + " rows");
+    Image<std::uint8_t> classes(scene.grid.width, scene.grid.height, 255);
+    Mask s(scene.grid.width, scene.grid.height, 255);
+    int next_row = 0, max_rows = 0;
+    const MergeSummary m = merge_tile_files(paths, o.areas, [&](int row0, const Image<std::uint8_t>& c, const Mask& band) {
+      EXPECT_EQ(row0, next_row);  // consecutive bands, north to south
+      next_row += c.height(), max_rows = std::max(max_rows, c.height());
+      for (int y = 0; y < c.height(); ++y)
+        for (int x = 0; x < c.width(); ++x) classes(x, row0 + y) = c(x, y), s(x, row0 + y) = band(x, y);
+    }, band_rows);
+    EXPECT_EQ(next_row, scene.grid.height);
+    EXPECT_LE(max_rows, band_rows);
+    EXPECT_EQ(m.grid, scene.grid);
+    EXPECT_EQ(m.tiles, 15);
+    EXPECT_EQ(classes.pixels(), single.classes.pixels());
+    EXPECT_EQ(s.pixels(), single.s.pixels());
+    for (int k = 0; k < kBuiltUpClasses; ++k) {
+      EXPECT_EQ(m.stats[k].cells, single.stats[k].cells);
+      EXPECT_EQ(m.stats[k].components, single.stats[k].components);
+      EXPECT_EQ(m.stats[k].settlements, single.stats[k].settlements);
+    }
+  }
+  const auto ignore = [](int, const Image<std::uint8_t>&, const Mask&) {};
+  EXPECT_THROW(merge_tile_files({paths[0], paths[1]}, o.areas, ignore), hf::Error);  // tiles missing
+  EXPECT_THROW(merge_tile_files({paths[0], paths[0]}, o.areas, ignore), hf::Error);  // a tile twice
+  std::filesystem::remove_all(dir);
 }
 
 TEST(Tiling, TileFilesRoundTripAndRejectCorruption) {
