@@ -11,8 +11,7 @@
 #include "head/feature_outputs.h"
 #include "head/feature_spec.h"
 #include "head/head_features.h"
-#include "io/obj.h"
-#include "io/ply.h"
+#include "head/mesh_file.h"
 
 namespace hf::apps {
 namespace {
@@ -24,13 +23,6 @@ struct HeadFeaturesArgs {
   double truncate_percent = 0;
   bool no_final_dilation = false;
 };
-
-TriangleMesh read_mesh(const std::string& path) {
-  const std::string ext = std::filesystem::path(path).extension().string();
-  if (ext == ".ply" || ext == ".PLY") return read_ply_mesh(path);
-  if (ext == ".obj" || ext == ".OBJ") return read_obj(path);
-  throw Error(path + ": expected a .ply or .obj mesh");
-}
 
 void run_head_features(const HeadFeaturesArgs& args) {
   head::HeadFeatureOptions options;
@@ -47,7 +39,7 @@ void run_head_features(const HeadFeaturesArgs& args) {
   options.areas.k = args.area_k;
   options.areas.separation_method = args.separation;
   options.areas.final_dilation = !args.no_final_dilation;
-  const TriangleMesh mesh = read_mesh(args.mesh_path);
+  const TriangleMesh mesh = head::read_mesh_file(args.mesh_path);
   head::HeadFeatureResult result;
   try {
     result = head::detect_head_features(mesh, options);

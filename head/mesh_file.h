@@ -1,0 +1,13 @@
+// A head mesh from a file, by extension: .ply (ASCII or binary, triangle strips included: io/ply.h) or .obj
+// (io/obj.h). Throws hf::Error naming the file for another extension or a malformed file.
+#pragma once
+
+#include <string>
+
+#include "io/mesh.h"
+
+namespace hf::head {
+
+TriangleMesh read_mesh_file(const std::string& path);
+
+}  // namespace hf::head
