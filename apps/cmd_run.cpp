@@ -16,6 +16,7 @@
 #include "datasets/synthetic_source.h"
 #include "fusion/voxel_block_grid.h"
 #include "io/dataset.h"
+#include "io/live_input.h"
 #include "slam/pipeline.h"
 #include "slam/sequence_run.h"
 
@@ -36,6 +37,7 @@ struct RunOptions {
   int synthetic_frames = 90;
   std::uint64_t seed = 0;
   bool global = false;  // --global: final pose-graph optimisation over all keyframes and re-fusion
+  std::string live_mode = "640x480@30";  // --live-mode for live inputs
 };
 
 std::unique_ptr<FrameSource> open_input(const RunOptions& o) {
@@ -46,9 +48,14 @@ std::unique_ptr<FrameSource> open_input(const RunOptions& o) {
     if (!o.camera.empty()) s.camera = camera_from_option(o.camera).camera;
     return datasets::open_synthetic_input(o.input, s);
   }
+  if (is_live_input(o.input)) return open_live_input(o.input, live_input_options(o.live_mode, o.camera));
   DatasetOptions d;
   d.camera = o.camera;
   return open_dataset(o.input, d);
+}
+
+std::string frames_text(const FrameSource& source) {
+  return source.size() == kUnknownFrameCount ? std::string("live") : std::to_string(source.size()) + " frames";
 }
 
 // The configuration: defaults, then the --config file, then the flags given on the command line.
@@ -88,7 +95,7 @@ void run(const RunOptions& o, const CLI::App& cmd) {
   InterruptGuard guard;  // from here on Ctrl-C / SIGTERM end the loop and the outputs are still written
   std::unique_ptr<FrameSource> source = open_input(o);
   if (source->size() == 0) throw Error(o.input + ": the dataset has no frames");
-  std::cerr << "input: " << source->name() << ", " << source->size() << " frames\n"
+  std::cerr << "input: " << source->name() << ", " << frames_text(*source) << "\n"
             << "camera: " << source->camera().describe() << " (" << source->camera_origin() << ")\n"
             << "registration: " << config.registration << " (backend " << config.backend << "), voxel "
             << config.volume.voxel_m * 1000.0 << " mm\n";
@@ -111,19 +118,25 @@ void run(const RunOptions& o, const CLI::App& cmd) {
     std::cerr << "stopped early (" << result.stopped_by << "): writing outputs for the " << result.frames.size()
               << " frames processed\n";
 
+  if (!result.input_ended.empty())
+    std::cerr << "input ended: " << result.input_ended << ": writing outputs for the " << result.frames.size()
+              << " frames processed\n";
   const slam::RunSummary summary = slam::summarize(result, pipeline, *source, o.input);
   const std::vector<std::string> written = slam::write_run_outputs(o.out, result, summary, pipeline, *source);
   std::cout << "outputs:\n";
   for (const auto& p : written) std::cout << "  " << std::filesystem::absolute(p).string() << "\n";
   std::cout << "frames: " << summary.frames << " (" << summary.frames_lost << " lost, " << summary.frames_bad
             << " unreadable), " << summary.fps << " fps\n";
+  if (summary.capture)
+    std::cout << "capture: " << summary.capture->captured << " frames at " << summary.capture->input_fps
+              << " fps, processed " << summary.capture->delivered << " at " << summary.capture->delivered_fps
+              << " fps, dropped " << summary.capture->dropped << "\n";
   if (const auto ate = summary.ate_rmse_m()) {
     std::cout << "ATE RMSE: " << *ate << " m" << (o.global ? " (after --global)" : "");
     if (summary.ate_online_m) std::cout << ", online " << *summary.ate_online_m << " m";
     std::cout << "\n";
   }
-  const std::string done = "outputs written for " + std::to_string(summary.frames) + " of " +
-                           std::to_string(source->size()) + " frames";
+  const std::string done = "outputs written for " + std::to_string(summary.frames) + " of " + frames_text(*source);
   guard.exit_if_interrupted(done);
   if (!result.stopped_by.empty())
     throw Error(o.input + ": " + done + "; stopped at " + result.stopped_by + " (now --capacity-blocks " +
@@ -135,7 +148,9 @@ void run(const RunOptions& o, const CLI::App& cmd) {
 void add_run_command(CLI::App& app) {
   auto opts = std::make_shared<RunOptions>();
   CLI::App* cmd = app.add_subcommand("run", "Track and fuse a dataset; write trajectory, mesh, report and plots");
-  cmd->add_option("--input", opts->input, "synthetic:PRESET, a TUM RGB-D folder, or a 7-Scenes folder")
+  cmd->add_option("--input", opts->input,
+                  "synthetic:PRESET, a TUM RGB-D folder, a 7-Scenes folder, or live: openni2://[URI], FILE.oni, "
+                  "v4l2:///dev/videoN[+/dev/videoM], libcamera://[ID] (`hashfusion devices` lists them)")
       ->capture_default_str();
   cmd->add_option("--out", opts->out, "output folder")->capture_default_str();
   cmd->add_option("--registration", opts->registration, "registration method, or groundtruth (fusion only)")
@@ -147,6 +162,8 @@ void add_run_command(CLI::App& app) {
                   "pyramid level tracking starts at (0 full, 1 half, 2 quarter resolution); default: the configuration's")
       ->check(CLI::Range(0, 2));
   cmd->add_option("--camera", opts->camera, "camera preset name or camera file (default: chosen per dataset)");
+  cmd->add_option("--live-mode", opts->live_mode, "live inputs: WIDTHxHEIGHT@FPS to ask the device for")
+      ->capture_default_str();
   cmd->add_flag("--global", opts->global,
                "after the last frame: optimise the keyframe pose graph once more and fuse the map anew from the "
                "corrected poses (report.json holds the online and the final trajectory's ATE)");

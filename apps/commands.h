@@ -14,5 +14,7 @@ void add_run_command(CLI::App& app);       // apps/cmd_run.cpp
 void add_bench_command(CLI::App& app);     // apps/cmd_bench.cpp
 void add_lidar_command(CLI::App& app);     // apps/cmd_lidar.cpp
 void add_head_features_command(CLI::App& app);  // apps/cmd_head_features.cpp
+void add_devices_command(CLI::App& app);   // apps/cmd_devices.cpp
+void add_record_command(CLI::App& app);    // apps/cmd_record.cpp
 
 }  // namespace hf::apps

@@ -18,6 +18,8 @@ int main(int argc, char** argv) {
   hf::apps::add_bench_command(app);
   hf::apps::add_lidar_command(app);
   hf::apps::add_head_features_command(app);
+  hf::apps::add_devices_command(app);
+  hf::apps::add_record_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -5,6 +5,8 @@
 //   bad_frame a frame that could not be used (missing/truncated image, wrong size, ...): the caller skips it and
 //             prints `message`, a single line naming the file and the problem; reading continues with the next one,
 //   end       no more frames (and every later call returns end again).
+// A live source (io/live_source.h) also ends with `end` when its device fails or falls silent; `message` then says
+// why (a finite source's end has an empty message).
 // Problems with the dataset as a whole (missing folder, malformed list file) are reported earlier, by the
 // constructor / open_dataset, as hf::Error or hf::ParseError. next() throws only for resource failures
 // (std::bad_alloc) that no frame-level skipping can fix.
@@ -39,7 +41,18 @@ struct FrameRead {
   FrameStatus status = FrameStatus::end;
   // ok: every field. bad_frame: index, timestamp_s, file names and ground truth (images empty). end: nothing.
   RgbdFrame frame;
-  std::string message;  // bad_frame: "FILE: what is wrong" (one line); empty otherwise
+  std::string message;  // bad_frame: "FILE: what is wrong" (one line); end of a live source: why; empty otherwise
+};
+
+// size() of a source whose length is not known in advance (a live device).
+inline constexpr size_t kUnknownFrameCount = size_t(-1);
+
+// What a live source saw between its device and its consumer (io/live_source.h): frames the device delivered,
+// frames handed to next(), frames dropped because the consumer was slower, and the two rates over wall time.
+struct CaptureStats {
+  size_t captured = 0, delivered = 0, dropped = 0;
+  double input_fps = 0.0;      // captured / seconds from the first to the last captured frame
+  double delivered_fps = 0.0;  // delivered / seconds from the first captured to the last delivered frame
 };
 
 class FrameSource {
@@ -52,13 +65,16 @@ class FrameSource {
   virtual const PinholeCamera& camera() const = 0;
   // Where camera() came from, for reports: e.g. "preset fr1 (folder name 'rgbd_dataset_freiburg1_desk')".
   virtual const std::string& camera_origin() const = 0;
-  // Number of frames next() will yield before end (ok and bad ones), known without decoding any image.
+  // Number of frames next() will yield before end (ok and bad ones), known without decoding any image;
+  // kUnknownFrameCount for a live device.
   virtual size_t size() const = 0;
   // Short human-readable name: format and folder, e.g. "TUM RGB-D 'data/rgbd_dataset_freiburg1_desk'".
   virtual const std::string& name() const = 0;
   // The dataset's own ground-truth trajectory (T_world_camera with time stamps; empty when it has none), for
   // evaluating estimated trajectories against.
   virtual const Trajectory& ground_truth() const = 0;
+  // Live sources: the capture counters so far (thread-safe); nullopt for datasets.
+  virtual std::optional<CaptureStats> capture_stats() const { return std::nullopt; }
 };
 
 }  // namespace hf

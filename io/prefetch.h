@@ -37,6 +37,7 @@ class PrefetchingSource : public FrameSource {
   size_t size() const override { return inner_->size(); }
   const std::string& name() const override { return inner_->name(); }
   const Trajectory& ground_truth() const override { return inner_->ground_truth(); }
+  std::optional<CaptureStats> capture_stats() const override { return inner_->capture_stats(); }
 
   const FrameSource& inner() const { return *inner_; }
   size_t capacity() const { return capacity_; }

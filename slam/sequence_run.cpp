@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -56,10 +57,13 @@ Trajectory SequenceRun::tracked_estimate() const {
 
 SequenceRun run_sequence(FrameSource& source, Pipeline& pipeline, const RunControl& control) {
   SequenceRun run;
-  const long available = long(source.size());
+  // A live source has no length: it runs until --max-frames, Ctrl-C or its device ends it.
+  const bool unbounded = source.size() == kUnknownFrameCount;
+  const long available = unbounded ? std::numeric_limits<long>::max() : long(source.size());
   const long total = control.max_frames > 0 ? std::min(control.max_frames, available) : available;
   std::unique_ptr<Progress> progress;
-  if (!control.progress_label.empty()) progress = std::make_unique<Progress>(control.progress_label, total);
+  if (!control.progress_label.empty())
+    progress = std::make_unique<Progress>(control.progress_label, total == std::numeric_limits<long>::max() ? 0 : total);
   const auto start = std::chrono::steady_clock::now();
   long read = 0;
   double busy_ms = 0.0;
@@ -71,7 +75,10 @@ SequenceRun run_sequence(FrameSource& source, Pipeline& pipeline, const RunContr
     const auto t0 = std::chrono::steady_clock::now();
     FrameRead fr = source.next();
     const double read_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    if (fr.status == FrameStatus::end) break;
+    if (fr.status == FrameStatus::end) {
+      run.input_ended = fr.message;
+      break;
+    }
     ++read;
     if (fr.status == FrameStatus::bad_frame) {
       run.bad_frames.push_back("frame " + std::to_string(fr.frame.index) + ": " + fr.message);
@@ -146,6 +153,7 @@ RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const Fra
   s.frames = long(run.frames.size());
   s.frames_bad = long(run.bad_frames.size());
   s.interrupted = run.interrupted;
+  s.capture = source.capture_stats();
   StageMs sum;
   long spell = 0;
   for (const auto& f : run.frames) {
@@ -229,6 +237,13 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
   j["finish_ms"] = s.finish_ms;
   j["interrupted"] = s.interrupted;
   j["stopped_by"] = run.stopped_by.empty() ? nlohmann::json(nullptr) : nlohmann::json(run.stopped_by);
+  j["input_ended"] = run.input_ended.empty() ? nlohmann::json(nullptr) : nlohmann::json(run.input_ended);
+  if (s.capture)
+    j["capture"] = {{"frames_captured", s.capture->captured}, {"frames_processed", s.capture->delivered},
+                    {"frames_dropped", s.capture->dropped},   {"input_fps", s.capture->input_fps},
+                    {"processed_fps", s.capture->delivered_fps}};
+  else
+    j["capture"] = nullptr;
   j["ate_rmse_m"] = opt(s.ate_rmse_m());
   j["rpe_trans_m_per_s"] = opt(s.rpe_trans_m_per_s());
   j["rpe_rot_deg_per_s"] = opt(s.rpe_rot_deg_per_s());
@@ -289,6 +304,12 @@ std::string report_markdown(const RunSummary& s, const SequenceRun& run, const F
      << "| keyframes | " << s.keyframes << ", " << s.loops_closed << " loops closed, " << s.frames_reintegrated
      << " frames re-fused (worst loop stage " << fmt(s.loop_worst_ms, 1) << " ms, finish " << fmt(s.finish_ms, 0)
      << " ms) |\n"
+     << (s.capture ? "| capture | " + std::to_string(s.capture->captured) + " frames in at " +
+                         fmt(s.capture->input_fps, 1) + " fps, " + std::to_string(s.capture->delivered) +
+                         " processed at " + fmt(s.capture->delivered_fps, 1) + " fps, " +
+                         std::to_string(s.capture->dropped) + " dropped (processing slower than the sensor)" +
+                         (run.input_ended.empty() ? "" : "; input ended: " + run.input_ended) + " |\n"
+                   : std::string())
      << "| speed | " << fmt(s.fps, 1) << " fps (" << fmt(s.mean_ms.total(), 1) << " ms per frame, worst "
      << fmt(s.worst_frame_ms, 1) << " ms) |\n"
      << "| map | " << s.blocks_allocated << " blocks, " << fmt(double(s.memory_bytes) / (1 << 20), 1) << " MiB, "

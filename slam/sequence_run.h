@@ -42,6 +42,8 @@ struct SequenceRun {
   // Non-empty when the loop ended early on a resource limit (the voxel block pool full, fusion::CapacityError):
   // the message; the frames before it are kept and are written like an interrupted run's.
   std::string stopped_by;
+  // Non-empty when a live source ended on its own (device unplugged or silent): FrameRead::message of its end.
+  std::string input_ended;
   double wall_s = 0.0;                    // the whole loop
 
   long frames_lost() const;
@@ -78,6 +80,7 @@ struct RunSummary {
   double loop_worst_ms = 0.0;               // the slowest loop-closure stage of a frame
   double finish_ms = 0.0;
   bool interrupted = false;
+  std::optional<CaptureStats> capture;       // live sources: frames in / processed / dropped and both rates
   std::optional<TrajectoryMetrics> metrics;  // ATE and RPE (1 s delta)
   double fps = 0.0;             // frames / sum of per-frame stage times
   StageMs mean_ms;              // per stage, averaged over processed frames (total = their sum)
@@ -94,7 +97,7 @@ RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const Fra
                      const std::string& input);
 
 // report.json: the fields of RunSummary (null where absent), "stopped_by" (SequenceRun::stopped_by, null when the
-// loop ran to its end or was interrupted), "ms_per_frame" {read, preprocess, track, integrate, raycast, total},
+// loop ran to its end or was interrupted), "input_ended" and "capture" (live sources; null otherwise), "ms_per_frame" {read, preprocess, track, integrate, raycast, total},
 // "config" (config_to_json), per-frame states, and the camera; write_run_outputs adds "outputs".
 nlohmann::json summary_to_json(const RunSummary& summary, const SequenceRun& run, const Pipeline& pipeline,
                                const FrameSource& source);

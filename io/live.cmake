@@ -1,0 +1,33 @@
+# hf_io_live: live capture (include()d by io/CMakeLists.txt after hf_io): the LiveSource queue, pixel formats,
+# V4L2 (Linux headers, always), OpenNI2 and libcamera where their development files are installed (each optional:
+# a machine without them builds the rest, and `hashfusion devices` says the back-end is not built in).
+find_path(HF_OPENNI2_INCLUDE_DIR OpenNI.h PATH_SUFFIXES openni2)
+find_library(HF_OPENNI2_LIBRARY OpenNI2)
+find_package(PkgConfig QUIET)
+if(PkgConfig_FOUND)
+  pkg_check_modules(HF_LIBCAMERA QUIET IMPORTED_TARGET libcamera)
+endif()
+
+set(hf_live_sources live_source.cpp live_input.cpp frame_pairing.cpp pixel_formats.cpp v4l2_capture.cpp tum_recorder.cpp
+    libcamera_frames.cpp)
+set(hf_have_openni2 0)
+set(hf_have_libcamera 0)
+if(HF_OPENNI2_INCLUDE_DIR AND HF_OPENNI2_LIBRARY)
+  list(APPEND hf_live_sources openni2_capture.cpp)
+  set(hf_have_openni2 1)
+endif()
+if(HF_LIBCAMERA_FOUND)
+  list(APPEND hf_live_sources libcamera_capture.cpp)
+  set(hf_have_libcamera 1)
+endif()
+message(STATUS "hashfusion live capture: OpenNI2 ${hf_have_openni2}, libcamera ${hf_have_libcamera}, V4L2 1")
+list(TRANSFORM hf_live_sources PREPEND ${CMAKE_CURRENT_SOURCE_DIR}/)
+hf_library(hf_io_live SOURCES ${hf_live_sources} DEPS hf_io opencv_core opencv_imgcodecs Threads::Threads)
+target_compile_definitions(hf_io_live PUBLIC HF_HAVE_OPENNI2=${hf_have_openni2} HF_HAVE_LIBCAMERA=${hf_have_libcamera})
+if(hf_have_openni2)
+  target_include_directories(hf_io_live SYSTEM PRIVATE ${HF_OPENNI2_INCLUDE_DIR})
+  target_link_libraries(hf_io_live PRIVATE ${HF_OPENNI2_LIBRARY})
+endif()
+if(hf_have_libcamera)
+  target_link_libraries(hf_io_live PRIVATE PkgConfig::HF_LIBCAMERA)
+endif()
