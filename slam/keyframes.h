@@ -60,6 +60,14 @@ struct Keyframe {
   SE3 T_previous_this;
   double path_m = 0.0;      // camera path length from the first keyframe, summed over keyframe steps
   Matrix6d information = Matrix6d::Zero();  // of the registration that placed it (zero for the first)
+  // The odometry edge measured independently of the map: this keyframe registered against the previous one's own
+  // images (set_odometry). Zero information when it was not measured; the pose graph then keeps T_previous_this.
+  // Why both: tracking against the global model snaps back onto old walls as they come into view, and that
+  // correction lands in T_previous_this, where a loop edge can no longer see the drift it removed from the end of
+  // the chain but not from its middle. The keyframe-to-keyframe measurement keeps the drift in the chain, so the
+  // loop edge spreads its correction over every keyframe of the loop.
+  SE3 T_previous_this_registered;
+  Matrix6d odometry_information = Matrix6d::Zero();
   CompressedRgbd images;    // empty once dropped for the budget
 };
 
@@ -80,6 +88,12 @@ class KeyframeMap {
   bool empty() const { return keyframes_.empty(); }
   const Keyframe& operator[](size_t id) const { return keyframes_.at(id); }
   void set_pose(size_t id, const SE3& T_world_camera) { keyframes_.at(id).T_world_camera = T_world_camera; }
+  // Records keyframe id's pose relative to keyframe id - 1 as registered between their own images.
+  void set_odometry(size_t id, const SE3& T_previous_this, const Matrix6d& information) {
+    Keyframe& k = keyframes_.at(id);
+    k.T_previous_this_registered = T_previous_this;
+    k.odometry_information = information;
+  }
   const std::vector<Keyframe>& all() const { return keyframes_; }
 
   bool has_images(size_t id) const { return !keyframes_.at(id).images.empty(); }

@@ -59,8 +59,13 @@ PoseGraph keyframe_graph(const KeyframeMap& keyframes, const std::vector<LoopEdg
     PoseGraphEdge e;
     e.from = i - 1;
     e.to = i;
-    e.T_from_to = b.T_previous_this;
-    e.information = odometry_information(b.information, b.frame_index - a.frame_index);
+    if (b.odometry_information.allFinite() && b.odometry_information.trace() > 0) {
+      e.T_from_to = b.T_previous_this_registered;
+      e.information = odometry_information(b.odometry_information, 1);
+    } else {
+      e.T_from_to = b.T_previous_this;
+      e.information = odometry_information(b.information, b.frame_index - a.frame_index);
+    }
     e.kind = PoseGraphEdgeKind::odometry;
     g.add_edge(e);
   }

@@ -62,6 +62,8 @@ std::vector<size_t> loop_candidates(const KeyframeMap& keyframes, size_t k,
                                     const std::vector<AppearanceMatch>& matches, const LoopClosureOptions& options);
 
 // The pose graph over every keyframe (current poses as the initial values) with the odometry chain and `loops`.
+// An odometry edge is the keyframe-to-keyframe registration where one was measured (Keyframe::
+// odometry_information non-zero), else the tracked relative pose.
 PoseGraph keyframe_graph(const KeyframeMap& keyframes, const std::vector<LoopEdge>& loops);
 
 // Information of an odometry edge spanning `frames` frames whose later end was placed with `information`: the

@@ -222,6 +222,7 @@ void Pipeline::initialise(const RgbdFrame& frame, FramePyramid& current, FrameRe
   velocity_ = SE3();
   lost_spell_ = 0;
   keep_frame(frame, r);
+  if (r->keyframe) close_loops(frame, r);
 }
 
 Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_s, FrameResult* r) {
@@ -374,20 +375,28 @@ std::vector<SE3> Pipeline::corrected_trajectory() const {
 // Registers the new keyframe against its loop candidates from the relative pose their current poses imply; the
 // first verified one becomes a loop edge and the graph is solved.
 void Pipeline::close_loops(const RgbdFrame& frame, FrameResult* r) {
-  if (!config_.loop_closure.enabled || !appearance_ || keyframes_.size() < 2) return;
+  if (!config_.loop_closure.enabled || !appearance_ || keyframes_.empty()) return;
   const auto t0 = std::chrono::steady_clock::now();
   const LoopClosureOptions& lo = config_.loop_closure;
   const size_t k = keyframes_.size() - 1;
-  const std::vector<AppearanceMatch> matches =
-      appearance_->query(frame.color, frame.depth, size_t(lo.candidates + lo.min_keyframe_gap) * 2);
-  const std::vector<size_t> candidates = loop_candidates(keyframes_, k, matches, lo);
-  if (candidates.empty()) return;
-  // The primary method: keyframe pairs often see one wall and a floor, which leaves ICP alone degenerate.
-  Registration& verifier = *registration_;
   FramePyramidOptions po = config_.pyramid;
   po.first_level = config_.tracking_level;
-  const FramePyramid kp = build_frame_pyramid(frame.depth, frame.color.empty() ? nullptr : &frame.color, camera_, po);
-  bool added = false;
+  FramePyramid kp = build_frame_pyramid(frame.depth, frame.color.empty() ? nullptr : &frame.color, camera_, po);
+  measure_odometry_edge(kp);
+  std::vector<size_t> candidates;
+  if (k > 0) {
+    const std::vector<AppearanceMatch> matches =
+        appearance_->query(frame.color, frame.depth, size_t(lo.candidates + lo.min_keyframe_gap) * 2);
+    candidates = loop_candidates(keyframes_, k, matches, lo);
+  }
+  if (candidates.empty()) {
+    keyframe_pyramid_ = std::move(kp);
+    r->ms.loop = ms_since(t0);
+    return;
+  }
+  // The primary method: keyframe pairs often see one wall and a floor, which leaves ICP alone degenerate.
+  Registration& verifier = *registration_;
+  size_t added = 0;
   for (size_t c : candidates) {
     const DepthImage cd = keyframes_.depth(c);
     const ColorImage cc = keyframes_.colour(c);
@@ -399,10 +408,10 @@ void Pipeline::close_loops(const RgbdFrame& frame, FrameResult* r) {
                                                tracking_camera_, reg.T_ref_cur, config_.volume.voxel_m);
     if (cons.overlap == 0 || double(cons.consistent) < lo.min_consistent * double(cons.overlap)) continue;
     loops_.push_back({c, k, reg.T_ref_cur, reg.information});
-    added = true;
-    break;
+    ++added;
   }
-  if (added && apply_graph(lo.graph)) {
+  keyframe_pyramid_ = std::move(kp);
+  if (added > 0 && apply_graph(lo.graph, added)) {
     r->loop_closed = true;
     ++loops_closed_;
     // The tracking reference keeps its maps (camera frame) and moves with the current keyframe.
@@ -414,15 +423,39 @@ void Pipeline::close_loops(const RgbdFrame& frame, FrameResult* r) {
   r->ms.loop = ms_since(t0);
 }
 
-// Solves the keyframe graph; on success every keyframe takes its solution. False when the solve failed or the
-// newest loop was rejected by the graph's consistency test (it is then dropped).
-bool Pipeline::apply_graph(const PoseGraphOptions& options) {
+// The newest keyframe registered against the previous one (their own images, the tracked relative pose as the
+// guess). Kept as the odometry edge only when the registration is good and the two depths agree; otherwise the
+// graph keeps the tracked relative pose (after a relocalisation the previous keyframe may be out of sight).
+void Pipeline::measure_odometry_edge(const FramePyramid& keyframe) {
+  const size_t k = keyframes_.size() - 1;
+  if (k == 0 || !keyframe_pyramid_ || keyframe_pyramid_->num_levels() == 0) return;
+  const RegistrationResult reg = registration_->align(keyframe, *keyframe_pyramid_, keyframes_[k].T_previous_this);
+  if (reg.status != RegistrationStatus::good || reg.degenerate_dims > 0 ||
+      reg.inlier_ratio < config_.loop_closure.min_inlier_ratio)
+    return;
+  const Consistency cons = depth_consistency(keyframe.levels[0].vertices, depth_of(keyframe_pyramid_->levels[0].vertices),
+                                             tracking_camera_, reg.T_ref_cur, config_.volume.voxel_m);
+  if (cons.overlap == 0 || double(cons.consistent) < config_.loop_closure.min_consistent * double(cons.overlap))
+    return;
+  keyframes_.set_odometry(k, reg.T_ref_cur, reg.information);
+}
+
+// Solves the keyframe graph; on success every keyframe takes its solution. The newest `new_loops` loops are
+// checked by the graph's consistency test: those it rejects are dropped, and when it rejects all of them nothing
+// moves (false). False too when the solve failed.
+bool Pipeline::apply_graph(const PoseGraphOptions& options, size_t new_loops) {
   const PoseGraph g = keyframe_graph(keyframes_, loops_);
   const PoseGraphResult res = g.optimize(options);
   if (!res.ok()) return false;
-  if (!loops_.empty() && !res.loop_accepted.empty() && !res.loop_accepted.back()) {
-    loops_.pop_back();
-    return false;
+  new_loops = std::min(new_loops, loops_.size());
+  if (new_loops > 0 && res.loop_accepted.size() == loops_.size()) {
+    const size_t first = loops_.size() - new_loops;
+    std::vector<LoopEdge> kept(loops_.begin(), loops_.begin() + std::ptrdiff_t(first));
+    for (size_t i = first; i < loops_.size(); ++i)
+      if (res.loop_accepted[i]) kept.push_back(loops_[i]);
+    const bool any = kept.size() > first;
+    loops_ = std::move(kept);
+    if (!any) return false;
   }
   for (size_t i = 0; i < keyframes_.size() && i < res.T_world_node.size(); ++i)
     keyframes_.set_pose(i, res.T_world_node[i]);

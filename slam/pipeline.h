@@ -21,7 +21,8 @@
 //   keyframe     an integrated frame is compressed once (slam/keyframes.h CompressedRgbd) and kept for re-fusion
 //                (slam/reintegration.h); one that moved far enough from the last keyframe becomes a keyframe and
 //                is added to the appearance index.
-//   close_loops  for a new keyframe: loop candidates by appearance and pose proximity, verified by registration
+//   close_loops  for a new keyframe: first its odometry edge, registered against the previous keyframe's own
+//                images (independent of the map, so the chain keeps the drift a loop must remove); then loop candidates by appearance and pose proximity, verified by registration
 //                (icp from the poses' relative guess, then inlier ratio and depth agreement); a verified loop
 //                joins the keyframe pose graph, which Ceres solves within loop_closure.time_budget_ms
 //                (slam/loop_closure.h, slam/pose_graph.h); the keyframes take the solution, the current pose with
@@ -165,7 +166,8 @@ class Pipeline {
   void raycast_reference(FramePyramid& current, const SE3& T_world_cur, bool integrated, FrameResult* r);
   void keep_frame(const RgbdFrame& frame, FrameResult* r);
   void close_loops(const RgbdFrame& frame, FrameResult* r);
-  bool apply_graph(const PoseGraphOptions& options);
+  void measure_odometry_edge(const FramePyramid& keyframe);
+  bool apply_graph(const PoseGraphOptions& options, size_t new_loops = 0);
   void reintegrate(FrameResult* r);
   void record_anchor(const FrameResult& r);
   void lose(FrameResult* r, std::string why);
@@ -185,6 +187,7 @@ class Pipeline {
   FusedFrames fused_;
   std::vector<LoopEdge> loops_;
   size_t loops_closed_ = 0;
+  std::optional<FramePyramid> keyframe_pyramid_;  // the newest keyframe's, for the next odometry edge
   // Per processed frame: the keyframe it moves with (npos before the first) and its pose relative to it.
   struct Anchor {
     size_t keyframe;

@@ -62,7 +62,13 @@ struct LoopRun {
 
 LoopRun run_loop(bool loop_closure, bool global) {
   constexpr int kFrames = 250;  // one lap (240 frames) and a little more
-  auto source = datasets::open_synthetic("loop", half_res("loop", kFrames));
+  // At the benchmark's input size (640x480, tracked at 320x240). At half that size the remaining error is
+  // dominated by a scale bias of the tracking (0.8 %, which no loop removes; 0.35 % at 640x480), and the ratio
+  // sits at the target itself (9.9 -> 5.0 mm).
+  datasets::SyntheticOptions o;
+  o.preset = "loop";
+  o.frames = kFrames;
+  auto source = datasets::open_synthetic("loop", o);
   PipelineConfig c = default_config();
   c.loop_closure.enabled = loop_closure;
   Pipeline pipeline(c, source->camera());
@@ -87,19 +93,18 @@ LoopRun run_loop(bool loop_closure, bool global) {
 }
 
 // One outward-looking lap of the room: tracking drifts until the first walls come back. Closing the loop on the
-// keyframe graph must lower the trajectory error, and the re-fused map must lie closer to the scene. The issue
-// asks for half the error; frame-to-model tracking already snaps back onto the first walls as they come into view,
-// so the graph finds less to remove (measured at 640x480: 4.85 -> 4.01 mm; bench/results/tracking.md) and the
-// test holds it to 10 %.
+// keyframe graph must halve the trajectory error (the issue's target), and the re-fused map must lie closer to
+// the scene. The graph's odometry edges are keyframe-to-keyframe registrations, independent of the map: the
+// tracked poses snap back onto the first walls as they come into view, which hides the drift from a loop edge.
 TEST(SlamRecovery, LoopClosureLowersTheErrorOfALap) {
   const LoopRun off = run_loop(false, false);
   const LoopRun on = run_loop(true, false);
   EXPECT_EQ(off.loops, 0u);
   EXPECT_GE(on.loops, 1u);
-  EXPECT_LE(on.ate_m, 0.9 * off.ate_m);
+  EXPECT_LE(on.ate_m, 0.5 * off.ate_m);
   EXPECT_LT(on.mesh_rms_m, off.mesh_rms_m);
   const LoopRun global = run_loop(true, true);
-  EXPECT_LE(global.ate_m, 0.9 * off.ate_m);
+  EXPECT_LE(global.ate_m, 0.5 * off.ate_m);
   EXPECT_LT(global.mesh_rms_m, off.mesh_rms_m);
 }
 
