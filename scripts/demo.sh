@@ -4,7 +4,8 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 bash scripts/setup.sh
-# Only what the demo runs: the CLI (the test command builds the rest into the same folder).
-bash scripts/build.sh release hashfusion
+# Only what the demo offers: the CLI and the Python module (the test command builds the rest into the same folder).
+bash scripts/build.sh release hashfusion hf_python
 out="${HF_DEMO_OUT:-$PWD/out/demo}"
 ./build/release/apps/hashfusion run --input synthetic:room --out "$out" "$@"
+echo "python: PYTHONPATH=$PWD/build/release/python python3 -c 'import hashfusion as hf'  (README.md, Python)"
