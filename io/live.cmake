@@ -5,7 +5,7 @@ find_path(HF_OPENNI2_INCLUDE_DIR OpenNI.h PATH_SUFFIXES openni2)
 find_library(HF_OPENNI2_LIBRARY OpenNI2)
 find_package(PkgConfig QUIET)
 if(PkgConfig_FOUND)
-  pkg_check_modules(HF_LIBCAMERA QUIET IMPORTED_TARGET libcamera)
+  pkg_check_modules(HF_LIBCAMERA QUIET IMPORTED_TARGET GLOBAL libcamera)
 endif()
 
 set(hf_live_sources live_source.cpp live_input.cpp frame_pairing.cpp pixel_formats.cpp v4l2_capture.cpp tum_recorder.cpp
