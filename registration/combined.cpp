@@ -1,5 +1,7 @@
 #include "registration/combined.h"
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
@@ -17,6 +19,61 @@ constexpr unsigned kInputs = HF_REG_IN_BIT(HF_REG_IN_CUR_VERTICES) | HF_REG_IN_B
 const DenseKernel kKernel = make_dense_kernel<hf_combined_params, hf_combined_pixel>(
     "combined", kInputs, 2, &detail::combined_rows_avx2);
 
+// One term in the balanced units S (rotations as displacements at the RMS point distance, as the driver's
+// degeneracy test): Hs = S H S, gs = S g, the projector P onto its eigen-directions with eigenvalue above
+// threshold times its largest (Zhang et al. 2016, per term; the identity for threshold 0) and that largest.
+struct BalancedTerm {
+  Matrix6d H, P;
+  Vector6d g;
+  double lmax = 0.0;
+};
+
+bool balance(const NormalEquations& term, const Vector6d& unit_scale, double threshold, BalancedTerm* out) {
+  out->H = unit_scale.asDiagonal() * term.JtJ * unit_scale.asDiagonal();
+  out->g = unit_scale.cwiseProduct(term.Jtr);
+  out->P = Matrix6d::Identity();
+  if (!out->H.allFinite() || !out->g.allFinite()) return false;
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(out->H);
+  if (eig.info() != Eigen::Success) return false;
+  out->lmax = std::max(0.0, eig.eigenvalues()(5));
+  if (!(threshold > 0.0)) return true;
+  out->P.setZero();
+  for (int i = 0; i < 6; ++i) {
+    if (out->lmax > 0.0 && eig.eigenvalues()(i) > threshold * out->lmax)
+      out->P += eig.eigenvectors().col(i) * eig.eigenvectors().col(i).transpose();
+  }
+  return true;
+}
+
+// The two terms with each one's degenerate directions projected out: H = P_i H_i P_i + Q P_p H_p P_p Q,
+// g = P_i g_i + Q P_p g_p (balanced units, mapped back). Along the directions icp leaves (I - P_i) the
+// photometric term is weighed up to icp's scale, Q = P_i + s (I - P_i) with s^2 = max(1, lmax_i / lmax_p), so the
+// driver's degeneracy test judges it there by its own eigenvalue ratio, not against icp's largest eigenvalue
+// (which lambda = rgb_weight would make arbitrary). s moves neither the solution (g = 0 needs P_i (g_i + g_p) = 0
+// and (I - P_i) g_p = 0 for any s > 0) nor anything where icp is well constrained (Q = I there).
+NormalEquations combine_per_direction(const NormalEquations& icp, const NormalEquations& photometric,
+                                      const Vector6d& unit_scale, double icp_threshold, double photometric_threshold) {
+  NormalEquations out;
+  out.cost = icp.cost + photometric.cost;
+  out.count = icp.count + photometric.count;
+  BalancedTerm i, p;
+  if (!balance(icp, unit_scale, icp_threshold, &i) || !balance(photometric, unit_scale, photometric_threshold, &p)) {
+    out.JtJ = icp.JtJ + photometric.JtJ;  // non-finite: the driver reports it
+    out.Jtr = icp.Jtr + photometric.Jtr;
+    return out;
+  }
+  const double s = p.lmax > 0.0 ? std::sqrt(std::max(1.0, i.lmax / p.lmax)) : 1.0;
+  const Matrix6d Q = i.P + s * (Matrix6d::Identity() - i.P);
+  const Matrix6d Hp = p.P * p.H * p.P;
+  Matrix6d H = i.P * i.H * i.P + Q * Hp * Q;
+  H = 0.5 * (H + H.transpose());
+  const Vector6d g = i.P * i.g + Q * (p.P * p.g);
+  const Vector6d inv_scale = unit_scale.cwiseInverse();
+  out.JtJ = inv_scale.asDiagonal() * H * inv_scale.asDiagonal();
+  out.Jtr = inv_scale.cwiseProduct(g);
+  return out;
+}
+
 class CombinedMethod final : public DenseMethod {
  public:
   explicit CombinedMethod(const CombinedOptions& options) : options_(options) {}
@@ -29,6 +86,18 @@ class CombinedMethod final : public DenseMethod {
   const void* params() const override { return &params_; }
   double rows_possible(const FramePyramidLevel& current) const override {
     return double(count_valid_pixels(current.vertices)) + options_.photometric.rows_possible(current);
+  }
+  std::vector<std::string> term_names() const override { return {"icp", "photometric"}; }
+  ResidualProblem term_problem(int t, const ResidualProblem& level) const override {
+    ResidualProblem p = level;
+    p.kernel = t == 0 ? &icp_kernel() : &photometric_kernel();
+    p.params = t == 0 ? static_cast<const void*>(&params_.icp) : static_cast<const void*>(&params_.photometric);
+    p.pixel_step = t == 0 ? 1 : std::max(1, params_.photometric.step);
+    return p;
+  }
+  NormalEquations combine_terms(const std::vector<NormalEquations>& terms, const Vector6d& unit_scale) const override {
+    return combine_per_direction(terms[0], terms[1], unit_scale, options_.icp_term_threshold,
+                                 options_.photometric_term_threshold);
   }
 
  private:
@@ -51,12 +120,19 @@ void CombinedOptions::visit(OptionVisitor& v) {
   icp.visit(v);
   photometric.visit(v);
   v("rgb_weight", rgb_weight);
+  v("icp_term_threshold", icp_term_threshold);
+  v("photometric_term_threshold", photometric_term_threshold);
 }
 
 void CombinedOptions::validate() const {
   icp.validate();
   photometric.validate();
   require_option(std::isfinite(rgb_weight) && rgb_weight >= 0.0f, "rgb_weight must be finite and >= 0");
+  require_option(std::isfinite(icp_term_threshold) && icp_term_threshold >= 0.0 && icp_term_threshold < 1.0,
+                 "icp_term_threshold must be in [0, 1)");
+  require_option(std::isfinite(photometric_term_threshold) && photometric_term_threshold >= 0.0 &&
+                     photometric_term_threshold < 1.0,
+                 "photometric_term_threshold must be in [0, 1)");
 }
 
 RegistrationMethod combined_registration_method() { return {"combined", defaults, make}; }

@@ -13,6 +13,8 @@
 #pragma once
 
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "registration/frame_pyramid.h"
 #include "registration/reduction.h"
@@ -41,6 +43,22 @@ class DenseMethod {
   virtual void end_iteration(const NormalEquations& ne) { (void)ne; }
   // The rows the finest level could give at most (for RegistrationResult::inlier_ratio).
   virtual double rows_possible(const FramePyramidLevel& current) const = 0;
+
+  // A method whose rows are several terms weighed per direction (combined: "icp", "photometric") names them here
+  // (RegistrationResult::terms). The driver then reduces each term's problem on its own instead of kernel()'s,
+  // and solves the system combine_terms() makes of them. Empty (the default): one reduction of kernel().
+  virtual std::vector<std::string> term_names() const { return {}; }
+  // Term t's problem at the level begun last: `level`'s maps and version with the term's kernel, params and step.
+  virtual ResidualProblem term_problem(int t, const ResidualProblem& level) const {
+    (void)t;
+    return level;
+  }
+  // The system the step is solved from, from each term's normal equations (term_names() order); unit_scale is
+  // the driver's balanced units S (balanced_units(), registration/gauss_newton.h).
+  virtual NormalEquations combine_terms(const std::vector<NormalEquations>& terms, const Vector6d& unit_scale) const {
+    (void)unit_scale;
+    return terms.empty() ? NormalEquations{} : terms.front();
+  }
 };
 
 // Valid vertices on the pixel grid x, y = 0, step, 2 step, ...

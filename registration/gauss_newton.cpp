@@ -295,15 +295,25 @@ RegistrationResult GaussNewtonRegistration::align_impl(const FramePyramid& curre
 
   SE3 T = T_initial;
   NormalEquations last;
+  std::vector<NormalEquations> last_terms;
   Vector6d last_step = Vector6d::Zero();
   bool have_last = false;
+  const std::vector<std::string> term_names = method_->term_names();
   for (int l = levels - 1; l >= 0; --l) {
     ResidualProblem problem = level_problem(current, reference, l, T);
+    std::vector<ResidualProblem> term_problems;
+    for (int t = 0; t < int(term_names.size()); ++t) term_problems.push_back(method_->term_problem(t, problem));
     for (int it = 0; it < o.iterations[size_t(l)]; ++it) {
       problem.T_ref_cur = to_transform12(T);
-      const NormalEquations ne = backend_->reduce(problem);
+      std::vector<NormalEquations> terms;
+      for (ResidualProblem& tp : term_problems) {
+        tp.T_ref_cur = problem.T_ref_cur;
+        terms.push_back(backend_->reduce(tp));
+      }
+      const NormalEquations ne = terms.empty() ? backend_->reduce(problem) : method_->combine_terms(terms, unit_scale);
       if (l == 0) {
         last = ne;
+        last_terms = terms;
         have_last = true;
       }
       if (ne.count < 6) break;  // nothing to solve on this level; the finest level decides the outcome
@@ -327,6 +337,9 @@ RegistrationResult GaussNewtonRegistration::align_impl(const FramePyramid& curre
   const GaussNewtonStep final_step = solve_balanced_step(last, unit_scale, o.degeneracy_threshold);
   if (!final_step.finite) return fail(RegistrationStatus::failed, "non-finite normal equations");
   classify_outcome(o, last, final_step, method_->rows_possible(current.levels[0]), T_initial, T, last_step, result);
+  for (size_t t = 0; t < last_terms.size(); ++t) {
+    result.terms.push_back({term_names[t], last_terms[t].JtJ, last_terms[t].count});
+  }
   return result;
 }
 

@@ -64,6 +64,8 @@ hf_icp_params IcpOptions::kernel_params(float weight) const {
   return p;
 }
 
+const DenseKernel& icp_kernel() { return kKernel; }
+
 RegistrationMethod icp_registration_method() { return {"icp", defaults, make}; }
 
 }  // namespace hf

@@ -26,6 +26,9 @@ struct IcpOptions : MethodOptionsBase<IcpOptions> {
   hf_icp_params kernel_params(float weight = 1.0f) const;
 };
 
+// The term's kernel (combined reduces it as one of its terms).
+const DenseKernel& icp_kernel();
+
 RegistrationMethod icp_registration_method();
 
 }  // namespace hf

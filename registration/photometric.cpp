@@ -89,6 +89,8 @@ double PhotometricOptions::rows_possible(const FramePyramidLevel& current) const
   return double(count_valid_pixels(current.vertices, finest_level_photometric_step));
 }
 
+const DenseKernel& photometric_kernel() { return kKernel; }
+
 RegistrationMethod photometric_registration_method() { return {"photometric", defaults, make}; }
 
 }  // namespace hf

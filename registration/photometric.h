@@ -38,6 +38,9 @@ struct PhotometricOptions : MethodOptionsBase<PhotometricOptions> {
   double rows_possible(const FramePyramidLevel& current) const;
 };
 
+// The term's kernel (combined reduces it as one of its terms).
+const DenseKernel& photometric_kernel();
+
 RegistrationMethod photometric_registration_method();
 
 }  // namespace hf

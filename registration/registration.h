@@ -199,6 +199,16 @@ struct RegistrationResult {
   // corridor: its axis), where the estimate along it tends to stay near the initial guess.
   Vector6d weakest_direction = Vector6d::Zero();
   std::string message;         // why the status is not good (one line), empty otherwise
+  // For a method whose rows are separate terms (combined: "icp" then "photometric"; DenseMethod::term_names), each
+  // term's own J^T W J at the solution (finest level, its term weight included, before the per-direction
+  // weighting; same units as `information`) and its rows. Two terms that are each well constrained but pull apart
+  // (colour not registered to depth) show as a large cost with both informations strong. Empty otherwise.
+  struct Term {
+    std::string name;
+    Matrix6d information = Matrix6d::Zero();
+    long rows = 0;
+  };
+  std::vector<Term> terms;
 
   bool usable() const {
     return status == RegistrationStatus::good || status == RegistrationStatus::poor ||
