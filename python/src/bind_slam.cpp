@@ -118,17 +118,6 @@ py::dict stage_ms(const slam::StageMs& s) {
   return d;
 }
 
-RgbdFrame frame_from_arrays(const py::object& depth, const py::object& color, double timestamp,
-                            const py::object& T_world_camera_gt, size_t index) {
-  RgbdFrame f;
-  f.index = index;
-  f.timestamp_s = timestamp;
-  f.depth = depth_from_array(depth, "depth");
-  f.color = color_from_array(color, "color");
-  if (!T_world_camera_gt.is_none()) f.T_world_camera_gt = se3_from_array(T_world_camera_gt, "T_world_camera_gt");
-  return f;
-}
-
 RunResult run(Pipeline& p, Dataset& d, long max_frames, bool global, const py::object& callback) {
   std::atomic<bool> stop{false};
   std::optional<py::error_already_set> error;  // from the callback or a signal handler

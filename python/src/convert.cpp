@@ -138,6 +138,17 @@ py::array_t<std::uint8_t> color_view(const ColorImage& color, const py::handle& 
   return image_array<const ColorImage, std::uint8_t>(&color, owner, {h, w, 3}, {w * 3, 3, 1});
 }
 
+RgbdFrame frame_from_arrays(const py::handle& depth, const py::handle& color, double timestamp,
+                            const py::handle& T_world_camera_gt, size_t index) {
+  RgbdFrame f;
+  f.index = index;
+  f.timestamp_s = timestamp;
+  f.depth = depth_from_array(depth, "depth");
+  f.color = color_from_array(color, "color");
+  if (!T_world_camera_gt.is_none()) f.T_world_camera_gt = se3_from_array(T_world_camera_gt, "T_world_camera_gt");
+  return f;
+}
+
 Trajectory trajectory_from_python(const py::handle& value, const char* what) {
   if (py::isinstance<py::str>(value) || py::hasattr(value, "__fspath__"))
     return read_tum_trajectory(py::str(py::module_::import("os").attr("fspath")(value)));

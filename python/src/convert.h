@@ -21,6 +21,7 @@
 
 #include "core/image.h"
 #include "core/se3.h"
+#include "io/frame_source.h"
 #include "io/trajectory_io.h"
 
 namespace hf::python {
@@ -43,6 +44,11 @@ py::array_t<std::uint8_t> color_to_array(ColorImage&& color);
 // Views into memory that `owner` keeps alive (e.g. a Frame's images).
 py::array_t<float> depth_view(const DepthImage& depth, const py::handle& owner);
 py::array_t<std::uint8_t> color_view(const ColorImage& color, const py::handle& owner);
+
+// A frame from its arrays (depth, colour as above; T_world_camera_gt None or a 4x4 pose); sizes are the caller's
+// to check (the pipeline checks them against its camera).
+RgbdFrame frame_from_arrays(const py::handle& depth, const py::handle& color, double timestamp,
+                            const py::handle& T_world_camera_gt, size_t index);
 
 Trajectory trajectory_from_python(const py::handle& value, const char* what);
 py::tuple trajectory_to_python(const Trajectory& trajectory);

@@ -86,13 +86,9 @@ void bind_frame(py::module_& m) {
   py::class_<RgbdFrame>(m, "Frame", "One RGB-D frame: depth float32 (H, W) metres, colour uint8 (H, W, 3) RGB")
       .def(py::init([](const py::object& depth, const py::object& color, double timestamp,
                        const py::object& T_world_camera_gt) {
-             RgbdFrame f;
-             f.depth = depth_from_array(depth, "depth");
-             f.color = color_from_array(color, "color");
+             RgbdFrame f = frame_from_arrays(depth, color, timestamp, T_world_camera_gt, 0);
              if (f.depth.width() != f.color.width() || f.depth.height() != f.color.height())
                throw ValueError("Frame: depth and color differ in size");
-             f.timestamp_s = timestamp;
-             if (!T_world_camera_gt.is_none()) f.T_world_camera_gt = se3_from_array(T_world_camera_gt, "T_world_camera_gt");
              return f;
            }),
            py::arg("depth"), py::arg("color"), py::arg("timestamp") = 0.0, py::arg("T_world_camera_gt") = py::none())
