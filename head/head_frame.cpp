@@ -293,8 +293,14 @@ HeadFrame find_head_frame(const TriangleMesh& mesh, const MeshTopology& topology
     width[side] = std::max(tiny, width_hi[side] - width_lo[side]);
     rec[side] = std::max(tiny, counted[side] > 0 ? recession[side] / counted[side] : 0.0);
   }
-  const double width_vote = std::log(width[0] / width[1]);  // > 0: +z is up
-  const double recession_vote = std::log(rec[0] / rec[1]);  // > 0: +z recedes more, so +z is up
+  // Each cue as (a - b) / (|a| + |b|) in [-1, 1]: for positive a, b this is tanh(log(a / b) / 2), the same order of
+  // decisiveness as the log ratio, but a profile that does not recede on one side (a mean recession <= 0, common
+  // on a noisy fused head whose tip is not quite the foremost point) no longer gives a near-infinite vote.
+  const auto cue = [](double a, double b) { return std::abs(a) + std::abs(b) > 0 ? (a - b) / (std::abs(a) + std::abs(b)) : 0.0; };
+  const double width_vote = cue(width_hi[0] - width_lo[0] > 0 ? width_hi[0] - width_lo[0] : 0.0,
+                                width_hi[1] - width_lo[1] > 0 ? width_hi[1] - width_lo[1] : 0.0);  // > 0: +z is up
+  const double recession_vote = cue(counted[0] > 0 ? recession[0] / counted[0] : 0.0,
+                                    counted[1] > 0 ? recession[1] / counted[1] : 0.0);  // > 0: +z recedes more: up
   const double vote = std::abs(width_vote) > std::abs(recession_vote) ? width_vote : recession_vote;
   const bool flip = vote < 0;
   if (flip) z_axis = -z_axis;
