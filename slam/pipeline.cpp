@@ -109,6 +109,10 @@ Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
     fo.driver.iterations = iterations;
     fallback_ = make_registration(config_.fallback_registration, fo, make_backend(config_.backend));
   }
+  if (!config_.seed_registration.empty()) {
+    RegistrationOptions so = default_registration_options(config_.seed_registration);
+    seed_ = make_registration(config_.seed_registration, so, make_backend(config_.backend));
+  }
   if (config_.relocalisation.enabled)
     appearance_ = make_appearance_index(config_.relocalisation.appearance.empty()
                                             ? default_appearance_index_name()
@@ -227,7 +231,14 @@ void Pipeline::initialise(const RgbdFrame& frame, FramePyramid& current, FrameRe
 
 Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_s, FrameResult* r) {
   const auto t0 = std::chrono::steady_clock::now();
-  const SE3 guess = config_.constant_velocity && lost_spell_ == 0 ? velocity_ : SE3();
+  SE3 guess = config_.constant_velocity && lost_spell_ == 0 ? velocity_ : SE3();
+  if (seed_) {  // a wide-baseline estimate replaces a motion prior it disagrees with (seed_registration)
+    const RegistrationResult seed = seed_->align(current, reference_->pyramid, guess);
+    const SE3 d = guess.inverse() * seed.T_ref_cur;
+    if (seed.usable() && (d.translation().norm() > config_.seed_min_motion_m ||
+                          d.angle_rad() * 180.0 / M_PI > config_.seed_min_motion_deg))
+      guess = seed.T_ref_cur;
+  }
   Verdict primary = decide(registration_->align(current, reference_->pyramid, guess), current, timestamp_s,
                            config_.registration);
   if (primary.action == Verdict::integrate || !fallback_) {
@@ -477,7 +488,9 @@ double Pipeline::finish(bool global) {
     PoseGraphOptions o = config_.loop_closure.graph;
     o.time_budget_ms = std::max(o.time_budget_ms, 10000.0);
     o.max_iterations = std::max(o.max_iterations, 500);
-    apply_graph(o);
+    // Without a loop the graph is a chain: its solution would only swap the model-tracked poses for the chained
+    // keyframe-to-keyframe registrations (each from two frames, not the whole map), so nothing global is solved.
+    if (!loops_.empty()) apply_graph(o);
     if (config_.reintegration.enabled) fused_.refuse_all(keyframes_, grid_, camera_, config_.integrate, &store_);
   } else if (config_.reintegration.enabled) {
     fused_.schedule(keyframes_);
