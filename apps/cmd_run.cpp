@@ -19,6 +19,10 @@
 #include "io/live_input.h"
 #include "slam/pipeline.h"
 #include "slam/sequence_run.h"
+#if HF_HAVE_VIEWER
+#include "io/ply.h"
+#include "viewer/run_viewer.h"
+#endif
 
 namespace hf::apps {
 namespace {
@@ -38,7 +42,47 @@ struct RunOptions {
   std::uint64_t seed = 0;
   bool global = false;  // --global: final pose-graph optimisation over all keyframes and re-fusion
   std::string live_mode = "640x480@30";  // --live-mode for live inputs
+  bool view = false;                     // --view: the viewer follows the run
+  std::string screenshot;                // --screenshot FILE.png: headless viewer, final view
+  long screenshot_every = 0;             // --screenshot-every N: headless, every N frames too
 };
+
+#if HF_HAVE_VIEWER
+// The viewer hooks into the loop through RunControl::observe (slam/sequence_run.h): a snapshot copy per frame,
+// the pause/step keys held there, 's' saving the mesh, and 'q' / a closed window ending the run as Ctrl-C does
+// (outputs written) but with exit status 0.
+struct RunView {
+  std::unique_ptr<viewer::RunViewer> viewer;
+  std::shared_ptr<std::atomic<bool>> stop = std::make_shared<std::atomic<bool>>(false);  // Ctrl-C or quit
+};
+
+RunView start_viewer(const RunOptions& o, const FrameSource& source, const slam::Pipeline& pipeline,
+                     slam::RunControl& control, const std::atomic<bool>* interrupt) {
+  RunView view;
+  if (!o.view && o.screenshot.empty()) return view;
+  viewer::RunViewerOptions v;
+  v.window = o.view && o.screenshot.empty();
+  v.screenshot = o.screenshot;
+  v.screenshot_every = o.screenshot_every;
+  v.out_dir = o.out;
+  view.viewer = std::make_unique<viewer::RunViewer>(source.camera(), v);
+  viewer::RunViewer* raw = view.viewer.get();
+  auto saved = std::make_shared<int>(0);
+  control.observe = [raw, &pipeline, saved, out = o.out, stop = view.stop, interrupt](const RgbdFrame& frame,
+                                                                                       const slam::FrameResult& r) {
+    raw->observe(frame, r, pipeline.map().block_count(), pipeline.map().memory_bytes());
+    if (raw->controller().take_save_request()) {
+      const std::string path = out + "/mesh_view_" + std::to_string((*saved)++) + ".ply";
+      write_ply(path, pipeline.extract_mesh());
+      std::cerr << "\nviewer: saved " << path << "\n";
+    }
+    raw->controller().wait_for_turn();
+    if (raw->controller().quit_flag()->load() || interrupt->load()) stop->store(true);
+  };
+  control.stop = view.stop.get();
+  return view;
+}
+#endif
 
 std::unique_ptr<FrameSource> open_input(const RunOptions& o) {
   if (datasets::is_synthetic_input(o.input)) {
@@ -106,6 +150,12 @@ void run(const RunOptions& o, const CLI::App& cmd) {
   control.stop = guard.flag();
   control.progress_label = "run";
   control.global = o.global;
+#if HF_HAVE_VIEWER
+  RunView view = start_viewer(o, *source, pipeline, control, guard.flag());
+#else
+  if (o.view || !o.screenshot.empty())
+    throw Error("--view / --screenshot: the viewer is not built in (install libglfw3-dev and libglm-dev, reconfigure)");
+#endif
   const slam::SequenceRun result = slam::run_sequence(*source, pipeline, control);
   if (result.frames.empty()) {
     guard.exit_if_interrupted("before the first frame, nothing written");
@@ -136,7 +186,14 @@ void run(const RunOptions& o, const CLI::App& cmd) {
     if (summary.ate_online_m) std::cout << ", online " << *summary.ate_online_m << " m";
     std::cout << "\n";
   }
-  const std::string done = "outputs written for " + std::to_string(summary.frames) + " of " + frames_text(*source);
+#if HF_HAVE_VIEWER
+  if (view.viewer) {
+    if (o.screenshot.empty()) std::cerr << "viewer: showing the final mesh; close the window to exit\n";
+    view.viewer->finish(pipeline.extract_mesh(), pipeline.last_good_pose().value_or(SE3()));
+    if (!o.screenshot.empty()) std::cout << "screenshot: " << std::filesystem::absolute(o.screenshot).string() << "\n";
+  }
+#endif
+  const std::string done = "outputs written for " + std::to_string(summary.frames) + (source->size() == kUnknownFrameCount ? std::string(" frames (live)") : " of " + frames_text(*source));
   guard.exit_if_interrupted(done);
   if (!result.stopped_by.empty())
     throw Error(o.input + ": " + done + "; stopped at " + result.stopped_by + " (now --capacity-blocks " +
@@ -162,6 +219,13 @@ void add_run_command(CLI::App& app) {
                   "pyramid level tracking starts at (0 full, 1 half, 2 quarter resolution); default: the configuration's")
       ->check(CLI::Range(0, 2));
   cmd->add_option("--camera", opts->camera, "camera preset name or camera file (default: chosen per dataset)");
+  cmd->add_flag("--view", opts->view, "a window follows the run (model, trajectory, input; space pause, n step, "
+               "r reset view, s save mesh, q quit; drag to orbit, scroll to zoom)");
+  cmd->add_option("--screenshot", opts->screenshot,
+                  "headless viewer: write the final mesh's OpenGL view from the last pose to FILE.png");
+  cmd->add_option("--screenshot-every", opts->screenshot_every,
+                  "with --screenshot: also FILE_NNNNNN.png of the model so far every N frames")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--live-mode", opts->live_mode, "live inputs: WIDTHxHEIGHT@FPS to ask the device for")
       ->capture_default_str();
   cmd->add_flag("--global", opts->global,

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   hf::apps::add_head_features_command(app);
   hf::apps::add_devices_command(app);
   hf::apps::add_record_command(app);
+  hf::apps::add_view_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -96,6 +96,7 @@ SequenceRun run_sequence(FrameSource& source, Pipeline& pipeline, const RunContr
     r.ms.read = read_ms;
     busy_ms += r.ms.total();
     if (control.on_frame) control.on_frame(r);
+    if (control.observe) control.observe(fr.frame, r);
     if (progress) {
       std::ostringstream status;
       status << std::fixed << std::setprecision(1) << (busy_ms > 0 ? 1000.0 * double(run.frames.size() + 1) / busy_ms : 0.0)

@@ -30,6 +30,9 @@ struct RunControl {
   std::string progress_label;                 // non-empty: a progress bar (core/progress.h) with fps and status
   bool warn_bad_frames = true;                // print "warning: skipping frame ..." lines to stderr
   std::function<void(const FrameResult&)> on_frame;  // called after each processed frame
+  // Called after each processed frame with its input too (the viewer's hook, apps/cmd_run.cpp); on the loop's
+  // thread, so it must only copy what it needs (it may block on purpose: a paused viewer holds the run).
+  std::function<void(const RgbdFrame&, const FrameResult&)> observe;
   // After the last frame: Pipeline::finish(global): drain the re-fusion queue, or (global, `--global`) solve the
   // keyframe graph once more and fuse the map anew from the final poses.
   bool global = false;

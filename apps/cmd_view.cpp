@@ -1,0 +1,34 @@
+// `hashfusion view mesh.ply | map.hfmap | OUTDIR [--screenshot FILE.png]`: browse a result in the OpenGL viewer
+// (viewer/view_files.h), or render one view headless into a PNG (under xvfb-run without a screen).
+#include <CLI/CLI.hpp>
+
+#include "apps/commands.h"
+#include "core/error.h"
+#if HF_HAVE_VIEWER
+#include "io/dataset.h"
+#include "viewer/view_files.h"
+#endif
+
+namespace hf::apps {
+
+void add_view_command(CLI::App& app) {
+  auto path = std::make_shared<std::string>();
+  auto screenshot = std::make_shared<std::string>();
+  auto camera = std::make_shared<std::string>();
+  CLI::App* cmd = app.add_subcommand("view", "Browse a mesh, a saved map or a run's output folder in the viewer");
+  cmd->add_option("path", *path, "mesh.ply, map.hfmap or a `run` output folder")->required();
+  cmd->add_option("--screenshot", *screenshot, "render one view into this PNG and exit (headless)");
+  cmd->add_option("--camera", *camera, "camera preset or file for the view (default: the run's, else ros)");
+  cmd->callback([path, screenshot, camera] {
+#if HF_HAVE_VIEWER
+    viewer::ViewFilesOptions o;
+    o.screenshot = *screenshot;
+    if (!camera->empty()) o.camera = camera_from_option(*camera).camera;
+    viewer::view_files(*path, o);
+#else
+    throw Error("view: the viewer is not built in (install libglfw3-dev, libglm-dev and OpenGL headers, reconfigure)");
+#endif
+  });
+}
+
+}  // namespace hf::apps

@@ -1,0 +1,378 @@
+#include "viewer/run_viewer.h"
+
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/gl.h>
+#include <GL/glext.h>
+#include <GLFW/glfw3.h>
+
+#include <condition_variable>
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <iomanip>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "core/error.h"
+#include "io/image_io.h"
+#include "viewer/gl_context.h"
+#include "viewer/mesh_renderer.h"
+
+namespace hf::viewer {
+namespace {
+
+constexpr int kWindowW = 1280, kWindowH = 720, kViewW = 853;  // the 3-D view takes the left two thirds
+constexpr size_t kMaxPoints = 3'000'000;                     // 36 MB of model points
+constexpr int kPointStride = 8;                               // one pixel in 8 x 8 per integrated frame
+
+const char* kQuadVertex = R"(#version 330 core
+layout(location = 0) in vec2 corner;
+out vec2 uv;
+void main() { uv = vec2(corner.x, 1.0 - corner.y); gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0); }
+)";
+const char* kQuadFragment = R"(#version 330 core
+in vec2 uv;
+uniform sampler2D image;
+out vec4 frag;
+void main() { frag = vec4(texture(image, uv).rgb, 1.0); }
+)";
+
+GLuint quad_program() {
+  auto compile = [](GLenum type, const char* src) {
+    const GLuint s = glCreateShader(type);
+    glShaderSource(s, 1, &src, nullptr);
+    glCompileShader(s);
+    return s;
+  };
+  const GLuint v = compile(GL_VERTEX_SHADER, kQuadVertex), f = compile(GL_FRAGMENT_SHADER, kQuadFragment);
+  const GLuint p = glCreateProgram();
+  glAttachShader(p, v);
+  glAttachShader(p, f);
+  glLinkProgram(p);
+  glDeleteShader(v);
+  glDeleteShader(f);
+  return p;
+}
+
+// The free camera's intrinsics for a viewport: a 60-degree-ish horizontal field of view.
+PinholeCamera view_camera(int w, int h) {
+  PinholeCamera c;
+  c.width = w;
+  c.height = h;
+  c.fx = c.fy = 0.75 * w;
+  c.cx = (w - 1) / 2.0;
+  c.cy = (h - 1) / 2.0;
+  return c;
+}
+
+ColorImage depth_as_grey(const DepthImage& d) {
+  ColorImage out(d.width(), d.height());
+  for (size_t i = 0; i < d.size(); ++i) {
+    const float v = d.pixels()[i];
+    const auto g = std::uint8_t(v > 0 ? std::clamp(255.0f - v * 50.0f, 30.0f, 255.0f) : 0.0f);  // near bright
+    out.pixels()[i] = {g, g, g};
+  }
+  return out;
+}
+
+struct Shot {
+  std::string path;
+  SE3 T_world_camera;
+  size_t points = 0, track = 0;  // what the model and trajectory held at that frame
+};
+
+}  // namespace
+
+std::string numbered_screenshot(const std::string& path, long index) {
+  const std::filesystem::path p(path);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "_%06ld", index);
+  return (p.parent_path() / (p.stem().string() + buf + p.extension().string())).string();
+}
+
+struct RunViewer::Impl {
+  PinholeCamera camera;
+  RunViewerOptions options;
+  ViewController controller;
+
+  std::mutex mutex;
+  std::condition_variable changed;
+  // The snapshot (tracking thread writes, window thread reads).
+  ColorImage color;
+  DepthImage depth;
+  std::vector<Eigen::Vector3f> points, track, lost_marks;
+  std::vector<Rgb8> point_colors;
+  std::optional<SE3> pose;
+  std::string status;
+  long version = 0;
+  std::deque<Shot> shots;
+  std::optional<TriangleMesh> final_mesh;
+  SE3 final_pose;
+  bool finishing = false, finished = false, started = false;
+  std::string error;
+  std::thread thread;
+
+  void run();
+  void render_headless(MeshRenderer& renderer);
+  void render_window(GlContext& context, MeshRenderer& renderer);
+  std::vector<Polyline> lines(size_t track_count, const std::optional<SE3>& current) const;
+};
+
+std::vector<Polyline> RunViewer::Impl::lines(size_t track_count, const std::optional<SE3>& current) const {
+  std::vector<Polyline> l;
+  Polyline t;
+  t.color = {60, 220, 60};
+  t.points_world.assign(track.begin(), track.begin() + long(std::min(track_count, track.size())));
+  l.push_back(std::move(t));
+  Polyline lost;
+  lost.color = {230, 40, 40};
+  lost.strip = false;
+  for (const auto& p : lost_marks) {
+    const float s = 0.02f;  // a 4 cm cross at each lost frame's reported pose
+    for (int axis = 0; axis < 3; ++axis) {
+      Eigen::Vector3f d = Eigen::Vector3f::Zero();
+      d[axis] = s;
+      lost.points_world.push_back(p - d);
+      lost.points_world.push_back(p + d);
+    }
+  }
+  l.push_back(std::move(lost));
+  if (current) l.push_back(camera_frustum(camera, *current, 0.2, {240, 220, 40}));
+  return l;
+}
+
+void RunViewer::Impl::run() {
+  try {
+    GlContext context(options.window ? kWindowW : camera.width, options.window ? kWindowH : camera.height,
+                      "hashfusion", options.window);
+    MeshRenderer renderer;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      started = true;
+    }
+    changed.notify_all();
+    if (options.window) render_window(context, renderer);
+    else render_headless(renderer);
+  } catch (const std::exception& e) {
+    std::lock_guard<std::mutex> lock(mutex);
+    error = e.what();
+  }
+  controller.release();
+  std::lock_guard<std::mutex> lock(mutex);
+  started = true;
+  finished = true;
+  changed.notify_all();
+}
+
+void RunViewer::Impl::render_headless(MeshRenderer& renderer) {
+  for (;;) {
+    std::unique_lock<std::mutex> lock(mutex);
+    changed.wait(lock, [this] { return !shots.empty() || finishing; });
+    if (!shots.empty()) {
+      const Shot shot = shots.front();
+      shots.pop_front();
+      const std::vector<Eigen::Vector3f> p(points.begin(), points.begin() + long(shot.points));
+      const std::vector<Rgb8> c(point_colors.begin(), point_colors.begin() + long(shot.points));
+      const std::vector<Polyline> l = lines(shot.track, shot.T_world_camera);
+      lock.unlock();
+      ViewController follow;
+      follow.reset(shot.T_world_camera);
+      renderer.set_points(p, c);
+      write_color_png(shot.path, renderer.render(camera, follow.T_world_view(), l, false));
+      continue;
+    }
+    // Finishing and every shot written: the final mesh from the last pose, as render.png shows it.
+    if (final_mesh && !options.screenshot.empty()) {
+      const TriangleMesh mesh = *final_mesh;
+      const SE3 at = final_pose;
+      lock.unlock();
+      renderer.set_points({}, {});
+      renderer.set_mesh(mesh);
+      write_color_png(options.screenshot, renderer.render(camera, at));
+    }
+    return;
+  }
+}
+
+void RunViewer::Impl::render_window(GlContext& context, MeshRenderer& renderer) {
+  auto* window = static_cast<GLFWwindow*>(context.window());
+  glfwSetWindowUserPointer(window, this);
+  glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int) {
+    if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
+    auto* self = static_cast<Impl*>(glfwGetWindowUserPointer(w));
+    switch (key) {
+      case GLFW_KEY_SPACE: self->controller.key(Key::pause); break;
+      case GLFW_KEY_N:
+      case GLFW_KEY_RIGHT: self->controller.key(Key::step); break;
+      case GLFW_KEY_R: self->controller.key(Key::reset_view); break;
+      case GLFW_KEY_S: self->controller.key(Key::save_mesh); break;
+      case GLFW_KEY_F: self->controller.key(Key::follow); break;
+      case GLFW_KEY_Q:
+      case GLFW_KEY_ESCAPE: self->controller.key(Key::quit); break;
+      default: break;
+    }
+  });
+  glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) {
+    static_cast<Impl*>(glfwGetWindowUserPointer(w))->controller.scroll(dy);
+  });
+  const GLuint quad = quad_program();
+  GLuint vao = 0, vbo = 0, textures[2] = {0, 0};
+  const float corners[] = {0, 0, 1, 0, 0, 1, 1, 1};
+  glGenVertexArrays(1, &vao);
+  glGenBuffers(1, &vbo);
+  glBindVertexArray(vao);
+  glBindBuffer(GL_ARRAY_BUFFER, vbo);
+  glBufferData(GL_ARRAY_BUFFER, sizeof corners, corners, GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 0, nullptr);
+  glGenTextures(2, textures);
+  for (GLuint t : textures) {
+    glBindTexture(GL_TEXTURE_2D, t);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  }
+  double last_x = 0, last_y = 0;
+  glfwGetCursorPos(window, &last_x, &last_y);
+  long seen = -1;
+  bool mesh_loaded = false;
+  std::vector<Polyline> l;
+  std::optional<SE3> current;
+  while (!glfwWindowShouldClose(window) && !controller.quit_flag()->load()) {
+    glfwWaitEventsTimeout(1.0 / 30.0);
+    double x = 0, y = 0;
+    glfwGetCursorPos(window, &x, &y);
+    if (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) controller.drag(x - last_x, y - last_y);
+    last_x = x;
+    last_y = y;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (version != seen) {
+        seen = version;
+        renderer.set_points(points, point_colors);
+        l = lines(track.size(), pose);
+        current = pose;
+        for (int i = 0; i < 2; ++i) {
+          const ColorImage img = i == 0 ? color : depth_as_grey(depth);
+          if (img.empty()) continue;
+          glBindTexture(GL_TEXTURE_2D, textures[i]);
+          glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+          glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, img.width(), img.height(), 0, GL_RGB, GL_UNSIGNED_BYTE, img.data());
+        }
+        glfwSetWindowTitle(window, (status + (controller.paused() ? "  [paused]" : "")).c_str());
+      }
+      if (final_mesh && !mesh_loaded) {
+        renderer.set_mesh(*final_mesh);
+        renderer.set_points({}, {});
+        mesh_loaded = true;
+        glfwSetWindowTitle(window, (status + "  [run finished: final mesh; close the window to exit]").c_str());
+      }
+    }
+    if (controller.follow() && current) controller.reset(*current);
+    int fw = 0, fh = 0;
+    glfwGetFramebufferSize(window, &fw, &fh);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(0, 0, fw, fh);
+    glClearColor(0.08f, 0.08f, 0.1f, 1);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    const int vw = fw * kViewW / kWindowW;
+    glViewport(0, 0, vw, fh);
+    renderer.draw(view_camera(vw, fh), controller.T_world_view(), l, true);
+    glDisable(GL_DEPTH_TEST);
+    glUseProgram(quad);
+    glBindVertexArray(vao);
+    for (int i = 0; i < 2; ++i) {  // colour on top, depth below, each half of the right column
+      glViewport(vw, i == 0 ? fh / 2 : 0, fw - vw, fh / 2);
+      glBindTexture(GL_TEXTURE_2D, textures[i]);
+      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    }
+    glfwSwapBuffers(window);
+  }
+  controller.key(Key::quit);  // a closed window ends the run (its outputs are written)
+  glDeleteTextures(2, textures);
+  glDeleteBuffers(1, &vbo);
+  glDeleteVertexArrays(1, &vao);
+  glDeleteProgram(quad);
+}
+
+RunViewer::RunViewer(const PinholeCamera& camera, const RunViewerOptions& options) : impl_(std::make_unique<Impl>()) {
+  impl_->camera = camera;
+  impl_->options = options;
+  impl_->thread = std::thread([this] { impl_->run(); });
+  std::unique_lock<std::mutex> lock(impl_->mutex);
+  impl_->changed.wait(lock, [this] { return impl_->started; });
+  if (!impl_->error.empty()) {
+    const std::string e = impl_->error;
+    lock.unlock();
+    impl_->thread.join();
+    throw Error(e);
+  }
+}
+
+RunViewer::~RunViewer() {
+  {
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    impl_->finishing = true;
+  }
+  impl_->controller.key(Key::quit);
+  impl_->changed.notify_all();
+  if (impl_->thread.joinable()) impl_->thread.join();
+}
+
+ViewController& RunViewer::controller() { return impl_->controller; }
+
+void RunViewer::observe(const RgbdFrame& frame, const slam::FrameResult& r, size_t blocks, size_t memory_bytes) {
+  Impl& m = *impl_;
+  std::vector<Eigen::Vector3f> new_points;
+  std::vector<Rgb8> new_colors;
+  if (r.integrated) {
+    const PinholeCamera& c = m.camera;
+    for (int y = kPointStride / 2; y < frame.depth.height(); y += kPointStride)
+      for (int x = kPointStride / 2; x < frame.depth.width(); x += kPointStride) {
+        const float d = frame.depth(x, y);
+        if (!(d > 0)) continue;
+        new_points.push_back((r.T_world_camera * c.backproject(x, y, d)).cast<float>());
+        new_colors.push_back(frame.color(x, y));
+      }
+  }
+  std::ostringstream status;
+  status << std::fixed << std::setprecision(1) << "hashfusion  frame " << r.index << "  " << slam::to_string(r.state)
+         << "  " << (r.ms.total() > 0 ? 1000.0 / r.ms.total() : 0.0) << " fps (track " << r.ms.track
+         << " ms, integrate " << r.ms.integrate << " ms, raycast " << r.ms.raycast << " ms)  " << blocks
+         << " blocks  " << double(memory_bytes) / (1 << 20) << " MiB";
+  {
+    std::lock_guard<std::mutex> lock(m.mutex);
+    m.color = frame.color;
+    m.depth = frame.depth;
+    if (m.points.size() + new_points.size() <= kMaxPoints) {
+      m.points.insert(m.points.end(), new_points.begin(), new_points.end());
+      m.point_colors.insert(m.point_colors.end(), new_colors.begin(), new_colors.end());
+    }
+    const Eigen::Vector3f at = r.T_world_camera.translation().cast<float>();
+    if (r.pose_valid) m.track.push_back(at);
+    else if (!m.track.empty()) m.lost_marks.push_back(at);
+    if (r.pose_valid) m.pose = r.T_world_camera;
+    m.status = status.str();
+    ++m.version;
+    if (!m.options.window && m.options.screenshot_every > 0 && long(r.index) % m.options.screenshot_every == 0 &&
+        !m.options.screenshot.empty())
+      m.shots.push_back({numbered_screenshot(m.options.screenshot, long(r.index)), r.T_world_camera, m.points.size(),
+                         m.track.size()});
+  }
+  m.changed.notify_all();
+}
+
+void RunViewer::finish(const TriangleMesh& mesh, const SE3& T_world_camera) {
+  Impl& m = *impl_;
+  {
+    std::lock_guard<std::mutex> lock(m.mutex);
+    m.final_mesh = mesh;
+    m.final_pose = T_world_camera;
+    m.finishing = true;
+  }
+  m.changed.notify_all();
+  if (m.thread.joinable()) m.thread.join();
+  if (!m.error.empty()) throw Error(m.error);
+}
+
+}  // namespace hf::viewer
