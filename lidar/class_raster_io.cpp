@@ -43,7 +43,7 @@ cv::Mat legend(int width) {
 }  // namespace
 
 ClassPngWriter::ClassPngWriter(const std::string& path, int width, int height)
-    : width_(width), height_(height), png_(path, std::max(width, kLegendWidth), height + kLegendRows),
+    : width_(width), png_(path, std::max(width, kLegendWidth), height + kLegendRows),
       line_(static_cast<size_t>(std::max(width, kLegendWidth)), Rgb8{255, 255, 255}) {}
 
 void ClassPngWriter::rows(const Image<std::uint8_t>& band) {

@@ -33,7 +33,7 @@ class ClassPngWriter {
   void close();  // appends the legend
 
  private:
-  int width_ = 0, height_ = 0;
+  int width_ = 0;
   PngStream png_;
   std::vector<Rgb8> line_;
 };
