@@ -112,9 +112,17 @@ size_t KeyframeMap::add(size_t frame_index, double timestamp_s, const SE3& T_wor
     k.path_m = keyframes_.back().path_m + k.T_previous_this.translation().norm();
   }
   k.information = information;
+  keyframes_.push_back(std::move(k));
+  set_images(keyframes_.back().id, std::move(images));
+  return keyframes_.back().id;
+}
+
+void KeyframeMap::set_images(size_t id, CompressedRgbd images) {
+  Keyframe& k = keyframes_.at(id);
+  if (id < dropped_) return;  // already given up for the budget
+  bytes_ -= k.images.bytes();
   k.images = std::move(images);
   bytes_ += k.images.bytes();
-  keyframes_.push_back(std::move(k));
   // Over the budget: the oldest keyframes give up their images first (never the newest one).
   const double budget = options_.memory_budget_mb * 1024.0 * 1024.0;
   while (double(bytes_) > budget && dropped_ + 1 < keyframes_.size()) {
@@ -122,7 +130,6 @@ size_t KeyframeMap::add(size_t frame_index, double timestamp_s, const SE3& T_wor
     bytes_ -= old.images.bytes();
     old.images.clear();
   }
-  return keyframes_.back().id;
 }
 
 DepthImage KeyframeMap::depth(size_t id) const { return keyframes_.at(id).images.depth(); }

@@ -88,6 +88,8 @@ class KeyframeMap {
   bool empty() const { return keyframes_.empty(); }
   const Keyframe& operator[](size_t id) const { return keyframes_.at(id); }
   void set_pose(size_t id, const SE3& T_world_camera) { keyframes_.at(id).T_world_camera = T_world_camera; }
+  // Gives keyframe id its images (one added with empty images while they were being compressed).
+  void set_images(size_t id, CompressedRgbd images);
   // Records keyframe id's pose relative to keyframe id - 1 as registered between their own images.
   void set_odometry(size_t id, const SE3& T_previous_this, const Matrix6d& information) {
     Keyframe& k = keyframes_.at(id);

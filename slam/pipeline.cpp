@@ -300,6 +300,7 @@ Pipeline::Verdict Pipeline::decide(const RegistrationResult& reg, const FramePyr
 std::optional<Pipeline::Verdict> Pipeline::relocalise(const RgbdFrame& frame, const FramePyramid& current,
                                                       FrameResult* r) {
   const auto t0 = std::chrono::steady_clock::now();
+  commit_pending_images();
   Registration& reg_method = fallback_ ? *fallback_ : *registration_;
   const std::vector<AppearanceMatch> matches =
       appearance_->query(frame.color, frame.depth, size_t(config_.relocalisation.candidates));
@@ -418,6 +419,7 @@ void Pipeline::close_loops(const RgbdFrame& frame, FrameResult* r) {
     const SE3 T_new = keyframes_[k].T_world_camera;
     T_world_cur_ = T_new;
     reference_->T_world_model = T_new;
+    commit_pending_images();  // the frame still being compressed is re-fused with the others
     if (config_.reintegration.enabled) fused_.schedule(keyframes_);
   }
   r->ms.loop = ms_since(t0);
@@ -473,6 +475,7 @@ void Pipeline::reintegrate(FrameResult* r) {
 double Pipeline::finish(bool global) {
   const auto t0 = std::chrono::steady_clock::now();
   if (!registration_) return 0.0;
+  commit_pending_images();
   if (global && keyframes_.size() > 1) {
     PoseGraphOptions o = config_.loop_closure.graph;
     o.time_budget_ms = std::max(o.time_budget_ms, 10000.0);
@@ -529,22 +532,43 @@ void Pipeline::raycast_reference(FramePyramid& current, const SE3& T_world_cur, 
 // An integrated frame is compressed once, for the re-fusion store and, when it is due, as a keyframe (which is
 // then the anchor it is stored with).
 void Pipeline::keep_frame(const RgbdFrame& frame, FrameResult* r) {
-  const bool keyframe = keyframes_.wants_keyframe(r->T_world_camera, frame.index);
-  if (!keyframe && !config_.reintegration.enabled) return;
   const auto t0 = std::chrono::steady_clock::now();
-  CompressedRgbd images = CompressedRgbd::encode(frame.depth, frame.color, config_.keyframes.jpeg_quality);
+  commit_pending_images();
+  const bool keyframe = keyframes_.wants_keyframe(r->T_world_camera, frame.index);
+  if (!keyframe && !config_.reintegration.enabled) {
+    r->ms.keyframe = ms_since(t0);
+    return;
+  }
+  PendingImages p;
+  p.images = std::async(std::launch::async, [depth = frame.depth, colour = frame.color,
+                                             quality = config_.keyframes.jpeg_quality] {
+    return CompressedRgbd::encode(depth, colour, quality);
+  });
   if (keyframe) {
     const Matrix6d info = r->registration ? r->registration->information : Matrix6d::Zero();
-    const size_t id = keyframes_.add(frame.index, frame.timestamp_s, r->T_world_camera, info,
-                                     config_.reintegration.enabled ? images : std::move(images));
-    if (appearance_) appearance_->add(id, frame.color, frame.depth);
+    p.keyframe = keyframes_.add(frame.index, frame.timestamp_s, r->T_world_camera, info, CompressedRgbd{});
+    if (appearance_) appearance_->add(*p.keyframe, frame.color, frame.depth);
     r->keyframe = true;
   }
-  if (config_.reintegration.enabled && !keyframes_.empty()) {
-    const size_t k = keyframes_.size() - 1;
-    fused_.add(frame.index, k, keyframes_[k].T_world_camera, r->T_world_camera, std::move(images));
+  if (!keyframes_.empty()) {
+    p.frame_index = frame.index;
+    p.anchor = keyframes_.size() - 1;
+    p.T_world_anchor = keyframes_[p.anchor].T_world_camera;
+    p.T_world_frame = r->T_world_camera;
   }
+  pending_images_ = std::move(p);
   r->ms.keyframe = ms_since(t0);
+}
+
+// Waits for the last kept frame's compression and hands the images to its keyframe and the re-fusion store.
+void Pipeline::commit_pending_images() {
+  if (!pending_images_) return;
+  PendingImages p = std::move(*pending_images_);
+  pending_images_.reset();
+  CompressedRgbd images = p.images.get();
+  const bool refuse = config_.reintegration.enabled && !keyframes_.empty();
+  if (p.keyframe) keyframes_.set_images(*p.keyframe, refuse ? images : std::move(images));
+  if (refuse) fused_.add(p.frame_index, p.anchor, p.T_world_anchor, p.T_world_frame, std::move(images));
 }
 
 void Pipeline::lose(FrameResult* r, std::string why) {

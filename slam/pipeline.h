@@ -20,7 +20,9 @@
 //   raycast      the model maps at the new pose: the next frame's reference.
 //   keyframe     an integrated frame is compressed once (slam/keyframes.h CompressedRgbd) and kept for re-fusion
 //                (slam/reintegration.h); one that moved far enough from the last keyframe becomes a keyframe and
-//                is added to the appearance index.
+//                is added to the appearance index. The compression runs on a worker thread while the next frame
+//                is processed (it is single-threaded PNG + JPEG work, ~11-14 ms at 640x480, beside stages that
+//                are not); the images join the keyframe and the re-fusion store before anything reads them.
 //   close_loops  for a new keyframe: first its odometry edge, registered against the previous keyframe's own
 //                images (independent of the map, so the chain keeps the drift a loop must remove); then loop candidates by appearance and pose proximity, verified by registration
 //                (icp from the poses' relative guess, then inlier ratio and depth agreement); a verified loop
@@ -60,6 +62,7 @@
 #pragma once
 
 #include <nlohmann/json_fwd.hpp>
+#include <future>
 #include <memory>
 #include <optional>
 #include <string>
@@ -140,7 +143,7 @@ class Pipeline {
   const KeyframeMap& keyframes() const { return keyframes_; }
   const std::vector<LoopEdge>& loops() const { return loops_; }
   size_t loops_closed() const { return loops_closed_; }
-  const FusedFrames& fused_frames() const { return fused_; }
+  const FusedFrames& fused_frames() const { return fused_; }  // the last kept frame joins it with the next
 
   // Every processed frame's pose after the loop closures so far, in processing order.
   std::vector<SE3> corrected_trajectory() const;
@@ -165,6 +168,7 @@ class Pipeline {
   void integrate(const RgbdFrame& frame, const SE3& T_world_cur, FrameResult* r);
   void raycast_reference(FramePyramid& current, const SE3& T_world_cur, bool integrated, FrameResult* r);
   void keep_frame(const RgbdFrame& frame, FrameResult* r);
+  void commit_pending_images();
   void close_loops(const RgbdFrame& frame, FrameResult* r);
   void measure_odometry_edge(const FramePyramid& keyframe);
   bool apply_graph(const PoseGraphOptions& options, size_t new_loops = 0);
@@ -187,6 +191,14 @@ class Pipeline {
   FusedFrames fused_;
   std::vector<LoopEdge> loops_;
   size_t loops_closed_ = 0;
+  // The last kept frame while its images are compressed on a worker thread (keep_frame).
+  struct PendingImages {
+    std::future<CompressedRgbd> images;
+    std::optional<size_t> keyframe;  // the keyframe it made, if any
+    size_t frame_index = 0, anchor = 0;
+    SE3 T_world_anchor, T_world_frame;  // as fused (a loop closure may move the anchor before the commit)
+  };
+  std::optional<PendingImages> pending_images_;
   std::optional<FramePyramid> keyframe_pyramid_;  // the newest keyframe's, for the next odometry edge
   // Per processed frame: the keyframe it moves with (npos before the first) and its pose relative to it.
   struct Anchor {
