@@ -25,31 +25,41 @@ bool pixel_covariance(const VertexMap& vertices, int x, int y, float gate_px_m, 
   if (c.w == 0.0f) return false;
   const int r = o.gicp_window_px;
   const float gate = gate_px_m * c.z, gate_sq = gate * gate;
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  // Sums relative to the centre (no cancellation of metres-sized coordinates): a few centimetres, so float
+  // keeps ~1e-9 m^2 of the scatter, far below the sensor's noise.
+  float sx = 0, sy = 0, sz = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
   int n = 0;
-  for (int v = std::max(0, y - r); v <= std::min(vertices.height() - 1, y + r); ++v) {
-    for (int u = std::max(0, x - r); u <= std::min(vertices.width() - 1, x + r); ++u) {
-      const hf_float4 q = vertices(u, v);
-      if (q.w == 0.0f) continue;
-      // Relative to the centre: no cancellation of metres-sized coordinates.
-      const Eigen::Vector3d d(double(q.x - c.x), double(q.y - c.y), double(q.z - c.z));
-      if (d.squaredNorm() > double(gate_sq)) continue;
-      sum += d;
-      scatter += d * d.transpose();
+  const int v0 = std::max(0, y - r), v1 = std::min(vertices.height() - 1, y + r);
+  const int u0 = std::max(0, x - r), u1 = std::min(vertices.width() - 1, x + r);
+  for (int v = v0; v <= v1; ++v) {
+    const hf_float4* row = &vertices(0, v);
+    for (int u = u0; u <= u1; ++u) {
+      const hf_float4 q = row[u];
+      const float dx = q.x - c.x, dy = q.y - c.y, dz = q.z - c.z;
+      if (q.w == 0.0f || !(dx * dx + dy * dy + dz * dz <= gate_sq)) continue;
+      sx += dx, sy += dy, sz += dz;
+      xx += dx * dx, xy += dx * dy, xz += dx * dz, yy += dy * dy, yz += dy * dz, zz += dz * dz;
       ++n;
     }
   }
   if (n < o.gicp_min_neighbours) return false;
-  const Eigen::Vector3d mean = sum / double(n);
-  const Eigen::Matrix3d cov = scatter / double(n) - mean * mean.transpose();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  const float inv = 1.0f / float(n);
+  const float mx = sx * inv, my = sy * inv, mz = sz * inv;
+  Eigen::Matrix3f cov;
+  cov(0, 0) = xx * inv - mx * mx;
+  cov(0, 1) = cov(1, 0) = xy * inv - mx * my;
+  cov(0, 2) = cov(2, 0) = xz * inv - mx * mz;
+  cov(1, 1) = yy * inv - my * my;
+  cov(1, 2) = cov(2, 1) = yz * inv - my * mz;
+  cov(2, 2) = zz * inv - mz * mz;
+  // Closed-form 3x3 eigen-decomposition (eigenvalues ascending: the normal first).
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> eig;
   eig.computeDirect(cov);
-  const Eigen::Vector3d ev = eig.eigenvalues();
-  if (!(ev(2) > 0.0) || !(ev(1) >= 1e-2 * ev(2))) return false;  // a line or a single point: no plane
-  const Eigen::Matrix3d U = eig.eigenvectors();
-  const Eigen::Vector3d regularised(double(o.gicp_epsilon), 1.0, 1.0);
-  *C = (U * regularised.asDiagonal() * U.transpose()).cast<float>();
+  const Eigen::Vector3f ev = eig.eigenvalues();
+  if (!(ev(2) > 0.0f) || !(ev(1) >= 1e-2f * ev(2))) return false;  // a line or a single point: no plane
+  // Segal's U diag(epsilon, 1, 1) U^T = I - (1 - epsilon) n n^T.
+  const Eigen::Vector3f normal = eig.eigenvectors().col(0);
+  *C = Eigen::Matrix3f::Identity() - (1.0f - o.gicp_epsilon) * normal * normal.transpose();
   return C->allFinite();
 }
 
