@@ -17,5 +17,6 @@ void add_head_features_command(CLI::App& app);  // apps/cmd_head_features.cpp
 void add_devices_command(CLI::App& app);   // apps/cmd_devices.cpp
 void add_record_command(CLI::App& app);    // apps/cmd_record.cpp
 void add_view_command(CLI::App& app);      // apps/cmd_view.cpp
+void add_model_command(CLI::App& app);     // apps/cmd_model.cpp
 
 }  // namespace hf::apps

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   hf::apps::add_devices_command(app);
   hf::apps::add_record_command(app);
   hf::apps::add_view_command(app);
+  hf::apps::add_model_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -63,7 +63,9 @@ std::vector<SegmentFit> fit_segments(const Shot& shot, int shot_index, const Pol
       if (!uv || !point_in_polygon(polygon, *uv)) continue;
       ++out.m;
       const double z = shot.to_camera(X).z();
-      const double radius_cells = std::max(0.5, f * segments[s].mean_spacing / z * raster.scale);
+      // At least one cell; at most the raster (a point near the camera covers everything anyway).
+      const double radius_cells = std::clamp(f * segments[s].mean_spacing / z * raster.scale, 0.5,
+                                             double(std::max(raster.mask.cols, raster.mask.rows)));
       const Eigen::Vector2d c = (*uv - raster.origin) * raster.scale;
       cv::circle(splats, cv::Point(int(std::lround(c.x() * 16)), int(std::lround(c.y() * 16))),
                  int(std::lround(radius_cells * 16)), cv::Scalar(255), cv::FILLED, cv::LINE_8, 4);

@@ -1,0 +1,88 @@
+// `hashfusion model`: Kellner's guided modelling of buildings from oriented photos (photogrammetry/): a network of
+// shots (OpenMVS dump, Middlebury *_par.txt or a hashfusion run folder) and SKETCH.json in, the 3D polygons, their
+// guidance states, textures and per-shot overlays out (photogrammetry/model_outputs.h).
+#include <CLI/CLI.hpp>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "apps/commands.h"
+#include "core/error.h"
+#include "io/ply.h"
+#include "photogrammetry/model_outputs.h"
+#include "photogrammetry/scene_readers.h"
+#include "photogrammetry/sketch.h"
+
+namespace hf::apps {
+namespace {
+
+struct ModelArgs {
+  std::string shots, polygons, out, cloud, dataset;
+  bool all_frames = false, snap = false, no_textures = false, no_overlays = false;
+  double acceptance_h = photogrammetry::CloudFitOptions{}.acceptance_h;
+  double ransac_threshold = 0.0;
+  int texture_px = photogrammetry::TextureOptions{}.max_texture_px;
+};
+
+void run_model(const ModelArgs& a) {
+  photogrammetry::RunShotsOptions run;
+  run.dataset = a.dataset;
+  run.keyframes_only = !a.all_frames;
+  photogrammetry::Network network = photogrammetry::read_network(a.shots, run);
+  if (!a.cloud.empty()) {
+    const PointCloud cloud = read_ply_point_cloud(a.cloud);
+    network.cloud = {};
+    for (const auto& p : cloud.positions) network.cloud.positions.push_back(p.cast<double>());
+    network.cloud.colors = cloud.colors;
+  }
+  const photogrammetry::Sketch sketch = photogrammetry::read_sketch(a.polygons);
+  photogrammetry::ModelJobOptions o;
+  o.model.fit.acceptance_h = a.acceptance_h;
+  o.model.ransac.distance_threshold = a.ransac_threshold;
+  o.snap = a.snap;
+  o.textures = !a.no_textures;
+  o.overlays = !a.no_overlays;
+  o.texture.max_texture_px = a.texture_px;
+  const photogrammetry::ModelJobResult r = photogrammetry::run_model_job(network, sketch, a.polygons, a.out, o);
+  std::cout << network.source << ": " << network.shots.size() << " shots, " << network.cloud.size()
+            << " cloud points, " << r.model.segments.size() << " planar segments\n";
+  for (const auto& p : r.model.polygons)
+    std::cout << "  " << p.id << ": " << to_string(p.decision.state) << " (" << to_string(p.decision.method)
+              << "): " << p.decision.reason << "\n";
+  std::cout << "outputs in " << a.out << " (polygons.json, model.obj, " << r.written.size() << " files)\n";
+}
+
+}  // namespace
+
+void add_model_command(CLI::App& app) {
+  auto a = std::make_shared<ModelArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "model", "3D building polygons from 2D sketches on oriented photos (Kellner): multi-shot DLT, cloud planes, "
+               "planes of existing polygons, guidance states, edge snapping, textures");
+  cmd->add_option("--shots", a->shots,
+                  "the network: an OpenMVS dump folder (cameras_from_scene_mvs.txt), a Middlebury *_par.txt (or its "
+                  "folder), or a hashfusion run folder (report.json; keyframes become shots)")
+      ->required();
+  cmd->add_option("--polygons", a->polygons, "SKETCH.json: 2D polygons per shot (README: Photogrammetric modelling)")
+      ->required();
+  cmd->add_option("--out", a->out, "output folder (created)")->required();
+  cmd->add_option("--cloud", a->cloud, "a .ply point cloud (or mesh) replacing the network's cloud");
+  cmd->add_option("--dataset", a->dataset, "a run's TUM folder when report.json's \"input\" has moved");
+  cmd->add_flag("--all-frames", a->all_frames, "a run: every tracked frame is a shot, not only keyframes");
+  cmd->add_flag("--snap", a->snap, "snap sketched edges to LSD line segments of the shots (section 5.2)");
+  cmd->add_option("--acceptance", a->acceptance_h, "acceptance threshold of the cloud fit h = m r / n")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--ransac-threshold", a->ransac_threshold,
+                  "RANSAC inlier distance in the network's units (0: 0.5 % of the cloud's robust extent)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--texture-px", a->texture_px, "longest texture side in texels")
+      ->check(CLI::Range(8, 16384))
+      ->capture_default_str();
+  cmd->add_flag("--no-textures", a->no_textures, "skip textures (model.obj is written untextured)");
+  cmd->add_flag("--no-overlays", a->no_overlays, "skip the per-shot overlay images");
+  cmd->callback([a] { run_model(*a); });
+}
+
+}  // namespace hf::apps
