@@ -13,12 +13,6 @@
 namespace hf {
 namespace {
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d S;
-  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return S;
-}
-
 // The information C^-1 of a pair's residual under rotation R, or zero when C is not invertible.
 Eigen::Matrix3d residual_information(const PointPair& pair, const Eigen::Matrix3d& R) {
   const Eigen::Matrix3d C = R * pair.Sigma_current * R.transpose() + pair.Sigma_reference;

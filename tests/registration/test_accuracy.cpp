@@ -69,8 +69,11 @@ TEST_P(RoomAccuracy, RecoversKnownMotionOnEveryBackend) {
     // sparse's floor is keypoint localisation, not the data: FAST corners on the integer grid of their ORB level
     // (+-0.5 px x 1.2^octave) over ~180 inliers leave ~0.05 deg even on exact data; it is held to the noisy bound.
     const bool keypoints = method == "sparse";
-    EXPECT_LT(et, !noise && !keypoints ? 0.5e-3 : photometric_only ? 5e-3 : 3e-3) << "noise " << noise;
-    EXPECT_LT(er, !noise && !keypoints ? 0.02 : photometric_only ? 0.3 : 0.2) << "noise " << noise;
+    // ndt-d2d's floor is its cells: the two frames' grids cut the surfaces differently, and the means of curved
+    // patches sit off the surface by different amounts (2.4 mm / 0.09 deg on exact data); photometric's bound.
+    const bool cells = method == "ndt-d2d";
+    EXPECT_LT(et, !noise && !keypoints && !cells ? 0.5e-3 : photometric_only || cells ? 5e-3 : 3e-3) << "noise " << noise;
+    EXPECT_LT(er, !noise && !keypoints && !cells ? 0.02 : photometric_only || cells ? 0.3 : 0.2) << "noise " << noise;
   }
 }
 

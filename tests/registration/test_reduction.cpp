@@ -155,8 +155,11 @@ TEST_P(CpuBackend, DeterministicAcrossChunkings) {
   EXPECT_EQ(x.to_sums(), y.to_sums());
 }
 
-INSTANTIATE_TEST_SUITE_P(Registry, CpuBackend, ::testing::ValuesIn(registration_names()),
-                         [](const auto& info) { return info.param; });
+INSTANTIATE_TEST_SUITE_P(Registry, CpuBackend, ::testing::ValuesIn(registration_names()), [](const auto& info) {
+  std::string name = info.param;  // registry keys may hold '-' (ndt-p2d): not a test name character
+  for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return name;
+});
 
 // A method's AVX2 path (DenseKernel::rows_avx2, registration/cpu_backend_avx2.h) evaluates its scalar kernel's
 // rows bit for bit, so against the pixel-by-pixel loop only the order of the double sums differs: agreement to

@@ -1,0 +1,75 @@
+#include "registration/ndt_p2d.h"
+
+#include "registration/gauss_newton.h"
+#include "registration/ndt/ndt_newton.h"
+
+namespace hf {
+namespace {
+
+// For each level (coarsest first), the current points against the reference's Gaussians around T p.
+std::vector<NdtLevel> p2d_levels(const std::vector<Eigen::Vector3d>& points, const NdtModel& model,
+                                 int neighbours) {
+  std::vector<NdtLevel> levels;
+  for (const NdtGrid& grid : model.levels) {
+    NdtLevel level;
+    level.cell_m = grid.cell_m();
+    level.associate = [&points, &grid, neighbours](const SE3& T, std::vector<NdtTerm>* terms) {
+      terms->clear();
+      std::vector<const NdtCell*> cells;
+      const Eigen::Matrix3d R = T.rotation();
+      for (const Eigen::Vector3d& p : points) {
+        grid.neighbourhood(R * p + T.translation(), neighbours, &cells);
+        for (const NdtCell* c : cells) {
+          terms->push_back({p, c->mean, c->Sigma_inv,
+                            constraining_information(c->eigenvalues, c->eigenvectors, grid.cell_m())});
+        }
+      }
+    };
+    levels.push_back(std::move(level));
+  }
+  return levels;
+}
+
+class NdtP2dRegistration final : public Registration {
+ public:
+  explicit NdtP2dRegistration(const RegistrationOptions& options) : options_(options) { options_.validate(); }
+
+  RegistrationResult align(const FramePyramid& current, const FramePyramid& reference,
+                           const SE3& T_ref_cur_initial) override {
+    const NdtOptions& o = options_.method_as<NdtOptions>();
+    return ndt_align_checked(current, reference, T_ref_cur_initial, options_,
+                             [&](const std::vector<Eigen::Vector3d>& cur, const std::vector<Eigen::Vector3d>& ref,
+                                 const SE3& T0) {
+                               const NdtModel model = build_ndt_model(ref, o.resolutions_m(), o.grid);
+                               NdtSolveOptions so;
+                               so.iterations = options_.driver.iterations;
+                               so.outlier_ratio = o.outlier_ratio;
+                               so.min_terms = options_.driver.min_inliers;
+                               so.rows_possible = double(cur.size());
+                               so.unit_scale = point_units(cur);
+                               return solve_ndt(p2d_levels(cur, model, o.neighbours), so, options_.driver,
+                                                T0);
+                             });
+  }
+  std::string name() const override { return "ndt-p2d"; }
+  const RegistrationOptions& options() const override { return options_; }
+
+ private:
+  RegistrationOptions options_;
+};
+
+RegistrationOptions defaults() {
+  GaussNewtonOptions driver;
+  driver.iterations = {10, 10, 10};  // per resolution, [0] the finest (0.1 m)
+  return RegistrationOptions(driver, std::make_unique<NdtOptions>());
+}
+
+std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
+  return std::make_unique<NdtP2dRegistration>(options);
+}
+
+}  // namespace
+
+RegistrationMethod ndt_p2d_registration_method() { return {"ndt-p2d", defaults, make}; }
+
+}  // namespace hf
