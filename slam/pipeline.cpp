@@ -109,6 +109,10 @@ Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
     fo.driver.iterations = iterations;
     fallback_ = make_registration(config_.fallback_registration, fo, make_backend(config_.backend));
   }
+  if (!config_.seed_registration.empty()) {
+    RegistrationOptions so = default_registration_options(config_.seed_registration);
+    seed_ = make_registration(config_.seed_registration, so, make_backend(config_.backend));
+  }
   if (config_.relocalisation.enabled)
     appearance_ = make_appearance_index(config_.relocalisation.appearance.empty()
                                             ? default_appearance_index_name()
@@ -227,7 +231,14 @@ void Pipeline::initialise(const RgbdFrame& frame, FramePyramid& current, FrameRe
 
 Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_s, FrameResult* r) {
   const auto t0 = std::chrono::steady_clock::now();
-  const SE3 guess = config_.constant_velocity && lost_spell_ == 0 ? velocity_ : SE3();
+  SE3 guess = config_.constant_velocity && lost_spell_ == 0 ? velocity_ : SE3();
+  if (seed_) {  // a wide-baseline estimate replaces a motion prior it disagrees with (seed_registration)
+    const RegistrationResult seed = seed_->align(current, reference_->pyramid, guess);
+    const SE3 d = guess.inverse() * seed.T_ref_cur;
+    if (seed.usable() && (d.translation().norm() > config_.seed_min_motion_m ||
+                          d.angle_rad() * 180.0 / M_PI > config_.seed_min_motion_deg))
+      guess = seed.T_ref_cur;
+  }
   Verdict primary = decide(registration_->align(current, reference_->pyramid, guess), current, timestamp_s,
                            config_.registration);
   if (primary.action == Verdict::integrate || !fallback_) {

@@ -12,6 +12,8 @@
 //                (frame-to-frame: the report, section 3.2, finds the model colour too blurred to track against).
 //                Both live in the camera frame of the last pose, so T_world_cur = T_world_ref * T_ref_cur. When
 //                that fails or disagrees with the map, fallback_registration (icp) is tried against the same model.
+//                With seed_registration set (sparse), it runs first and its estimate becomes the initial guess
+//                where it disagrees with the motion prior (large motion).
 //   decide       the verdict (Verdict) from the registration results, computed before any state changes:
 //                integrate, odometry or lose (the failure policy below).
 //   relocalise   only for a frame the verdict loses, once keyframes exist: the frame is registered against the
@@ -183,6 +185,7 @@ class Pipeline {
   fusion::BlockStore store_;
   std::unique_ptr<Registration> registration_;  // null for groundtruth
   std::unique_ptr<Registration> fallback_;      // null when none
+  std::unique_ptr<Registration> seed_;          // seed_registration; null when none
   std::unique_ptr<Reference> reference_;        // model maps + intensity at the last pose
   KeyframeMap keyframes_;
   std::unique_ptr<AppearanceIndex> appearance_;

@@ -175,6 +175,9 @@ template <class V>
 void visit_scalars(V&& v, PipelineConfig& c) {
   v("registration", c.registration);
   v("fallback_registration", c.fallback_registration);
+  v("seed_registration", c.seed_registration);
+  v("seed_min_motion_m", c.seed_min_motion_m);
+  v("seed_min_motion_deg", c.seed_min_motion_deg);
   v("backend", c.backend);
   v("tracking_level", c.tracking_level);
   v("constant_velocity", c.constant_velocity);
@@ -257,6 +260,14 @@ void PipelineConfig::validate() const {
     if (std::find(names.begin(), names.end(), fallback_registration) == names.end())
       throw Error("unknown fallback_registration '" + fallback_registration + "'");
   }
+  if (!seed_registration.empty()) {
+    const auto names = registration_names();
+    if (std::find(names.begin(), names.end(), seed_registration) == names.end())
+      throw Error("unknown seed_registration '" + seed_registration + "'");
+  }
+  if (!(seed_min_motion_m >= 0.0) || !(seed_min_motion_deg >= 0.0) || !std::isfinite(seed_min_motion_m) ||
+      !std::isfinite(seed_min_motion_deg))
+    throw Error("seed_min_motion_m and seed_min_motion_deg must be finite and >= 0");
   keyframes.validate();
   loop_closure.validate();
   reintegration.validate();

@@ -37,6 +37,13 @@ struct PipelineConfig {
   // geometric rows alone cannot be led astray by a bad colour frame or unregistered colour. Empty = none; unused
   // when it equals `registration`.
   std::string fallback_registration = "icp";
+  // Seeding for large motions: this registry method (normally "sparse", whose answer does not depend on the guess)
+  // runs first on every frame against the same reference; where its usable estimate differs from the motion prior
+  // by more than seed_min_motion_m or seed_min_motion_deg, `registration` (and the fallback) start from it instead.
+  // Empty = off, the default: it costs the seed's time on every frame (bench/results/sparse.md measures both).
+  std::string seed_registration;
+  double seed_min_motion_m = 0.03;    // well above a converged dense estimate's disagreement with sparse (~5 mm)
+  double seed_min_motion_deg = 3.0;
   std::string backend = "cpu";             // reduction backend: cpu | opencl
   fusion::VolumeParams volume;             // voxel_m 0.01, truncation 4 voxels, capacity, weight cap
   fusion::IntegrateParams integrate;
