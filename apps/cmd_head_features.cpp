@@ -11,7 +11,7 @@
 #include "head/feature_outputs.h"
 #include "head/feature_spec.h"
 #include "head/head_features.h"
-#include "head/mesh_file.h"
+#include "io/mesh_file.h"
 
 namespace hf::apps {
 namespace {
@@ -39,7 +39,7 @@ void run_head_features(const HeadFeaturesArgs& args) {
   options.areas.k = args.area_k;
   options.areas.separation_method = args.separation;
   options.areas.final_dilation = !args.no_final_dilation;
-  const TriangleMesh mesh = head::read_mesh_file(args.mesh_path);
+  const TriangleMesh mesh = read_mesh_file(args.mesh_path);
   head::HeadFeatureResult result;
   try {
     result = head::detect_head_features(mesh, options);

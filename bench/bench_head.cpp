@@ -8,7 +8,7 @@
 
 #include "head/discrete_curvature.h"
 #include "head/laplace_beltrami.h"
-#include "head/mesh_file.h"
+#include "io/mesh_file.h"
 #include "head/mls_curvature.h"
 
 namespace {

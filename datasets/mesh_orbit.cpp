@@ -36,12 +36,14 @@ SE3 mesh_orbit_pose(const MeshOrbitOptions& o, int i) {
   return SE3(R, centre);
 }
 
+double mesh_orbit_timestamp_s(int i) { return std::round(1e6 * i / 30.0) / 1e6; }
+
 SyntheticFrame mesh_orbit_frame(const TriangleMesh& mesh, const MeshOrbitOptions& o, int i) {
   o.validate();
   if (i < 0 || i >= o.frames) throw Error("mesh orbit: frame " + std::to_string(i) + " is not in 0.." + std::to_string(o.frames - 1));
   SyntheticFrame f;
   f.index = i;
-  f.timestamp_s = std::round(1e6 * i / 30.0) / 1e6;
+  f.timestamp_s = mesh_orbit_timestamp_s(i);
   f.T_world_camera = mesh_orbit_pose(o, i);
   const RenderedView view = render_mesh(mesh, o.camera, f.T_world_camera);
   f.depth_clean = view.depth;

@@ -35,6 +35,7 @@ struct MeshOrbitOptions {
 };
 
 SE3 mesh_orbit_pose(const MeshOrbitOptions& options, int i);  // T_world_camera of frame i
+double mesh_orbit_timestamp_s(int i);  // round(1e6 i / 30) / 1e6: 30 Hz, as SyntheticSequence
 SyntheticFrame mesh_orbit_frame(const TriangleMesh& mesh_world, const MeshOrbitOptions& options, int i);
 
 }  // namespace hf::datasets

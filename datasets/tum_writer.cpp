@@ -23,12 +23,10 @@ std::string tum_stamp(double t) {
 
 namespace {
 
-void write_list(const std::string& path, const std::string& what, const std::string& sub,
-                const SyntheticSequence& seq) {
+void write_list(const std::string& path, const std::string& what, const std::string& sub, const TumSequence& seq) {
   write_file_atomically(path, [&](std::ostream& out) {
-    out << "# " << what << " images\n# file: 'synthetic " << seq.options().preset << " seed "
-        << seq.options().seed << "'\n# timestamp filename\n";
-    for (int i = 0; i < seq.size(); ++i) {
+    out << "# " << what << " images\n# file: '" << seq.list_name << "'\n# timestamp filename\n";
+    for (int i = 0; i < seq.frames; ++i) {
       const std::string t = tum_stamp(seq.timestamp_s(i));
       out << t << ' ' << sub << '/' << t << ".png\n";
     }
@@ -94,7 +92,18 @@ void refuse_precious_folder(const std::string& dir) {
 
 }  // namespace
 
-void write_tum_folder(const SyntheticSequence& seq, const std::string& dir_in, const TumWriteOptions& options) {
+void write_tum_folder(const SyntheticSequence& synthetic, const std::string& dir, const TumWriteOptions& options) {
+  TumSequence seq;
+  seq.frames = synthetic.size();
+  seq.camera = synthetic.camera();
+  seq.list_name = "synthetic " + synthetic.options().preset + " seed " + std::to_string(synthetic.options().seed);
+  seq.trajectory_name = "synthetic '" + synthetic.options().preset + "'";
+  seq.timestamp_s = [&](int i) { return synthetic.timestamp_s(i); };
+  seq.frame = [&](int i) { return synthetic.frame(i); };
+  write_tum_folder(seq, dir, options);
+}
+
+void write_tum_folder(const TumSequence& seq, const std::string& dir_in, const TumWriteOptions& options) {
   if (dir_in.empty()) throw Error("generate: expected a non-empty output folder");
   std::string dir = dir_in;
   while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
@@ -121,20 +130,20 @@ void write_tum_folder(const SyntheticSequence& seq, const std::string& dir_in, c
     if (!ec) fs::create_directories(fs::path(tmp) / "depth", ec);
     if (ec) throw Error(dir + ": cannot create the output folder (" + ec.message() + ")");
     Trajectory gt;
-    for (int i = 0; i < seq.size(); ++i) {
+    for (int i = 0; i < seq.frames; ++i) {
       const SyntheticFrame f = seq.frame(i);
       const std::string t = tum_stamp(f.timestamp_s);
       write_color_png(tmp + "/rgb/" + t + ".png", f.color);
       write_depth_png(tmp + "/depth/" + t + ".png", f.depth, 5000.0);
       gt.push_back({f.timestamp_s, f.T_world_camera});
-      if (options.progress) options.progress(i + 1, seq.size());
+      if (options.progress) options.progress(i + 1, seq.frames);
     }
     write_list(tmp + "/rgb.txt", "color", "rgb", seq);
     write_list(tmp + "/depth.txt", "depth", "depth", seq);
     write_tum_trajectory(tmp + "/groundtruth.txt", gt,
-                         "ground truth trajectory (T_world_camera) of synthetic '" + seq.options().preset + "'\n" +
+                         "ground truth trajectory (T_world_camera) of " + seq.trajectory_name + "\n" +
                              "timestamp tx ty tz qx qy qz qw");
-    seq.camera().save(tmp + "/camera.json");
+    seq.camera.save(tmp + "/camera.json");
   } catch (...) {
     std::error_code ignore;
     fs::remove_all(tmp, ignore);

@@ -30,6 +30,19 @@ struct TumWriteOptions {
 // be written, a file cannot be written, or the final exchange fails.
 void write_tum_folder(const SyntheticSequence& sequence, const std::string& dir, const TumWriteOptions& options = {});
 
+// The same folder from any in-process sequence (a mesh orbit, datasets/mesh_orbit.h): `frames` frames rendered by
+// frame(i) (colour, depth, time stamp, T_world_camera), seen by `camera`; the names go into the lists' and
+// groundtruth.txt's headers.
+struct TumSequence {
+  int frames = 0;
+  PinholeCamera camera;
+  std::string list_name;        // "# file: '...'" of rgb.txt and depth.txt
+  std::string trajectory_name;  // "ground truth trajectory (T_world_camera) of ..." of groundtruth.txt
+  std::function<double(int)> timestamp_s;
+  std::function<SyntheticFrame(int)> frame;
+};
+void write_tum_folder(const TumSequence& sequence, const std::string& dir, const TumWriteOptions& options = {});
+
 // "%.6f" of a time stamp, the TUM file-name and list format.
 std::string tum_stamp(double timestamp_s);
 

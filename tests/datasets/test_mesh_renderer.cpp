@@ -10,6 +10,13 @@
 #include "core/error.h"
 #include "datasets/mesh_orbit.h"
 #include "datasets/mesh_renderer.h"
+#include "datasets/tum_writer.h"
+#include "io/image_io.h"
+#include "io/trajectory_io.h"
+
+#include <unistd.h>
+
+#include <filesystem>
 
 namespace hf::datasets {
 namespace {
@@ -87,6 +94,39 @@ TEST(MeshOrbit, CamerasLookAtTheTargetFromTheStatedPlace) {
   EXPECT_GT(first.y(), 0);  // starts in start_world's direction (+y)
   o.start_world = Eigen::Vector3d::UnitZ();  // parallel to up
   EXPECT_THROW(o.validate(), hf::Error);
+}
+
+// A mesh orbit written as a TUM folder (what `generate --mesh` does): the poses read back as the ground truth, the
+// depth PNGs hold the square at its distance (5000 units per metre: within 0.1 mm) and the time stamps are 30 Hz.
+TEST(MeshOrbit, WritesATumFolder) {
+  const TriangleMesh m = square(0.3, 0.0, 0.0);  // in the z = 0 plane, seen from +z
+  MeshOrbitOptions o;
+  o.frames = 3;
+  o.camera = PinholeCamera::preset("ros").scaled(2);
+  o.noise = NoiseOptions::none();
+  o.up_world = Eigen::Vector3d::UnitY();
+  o.start_world = Eigen::Vector3d::UnitZ();
+  o.elevation_deg = 0;
+  o.sweep_deg = 30;
+  o.distance_m = 1.0;
+  TumSequence seq;
+  seq.frames = o.frames;
+  seq.camera = o.camera;
+  seq.list_name = seq.trajectory_name = "a test square";
+  seq.timestamp_s = mesh_orbit_timestamp_s;
+  seq.frame = [&](int i) { return mesh_orbit_frame(m, o, i); };
+  const std::string dir = (std::filesystem::temp_directory_path() / ("hf_mesh_orbit_" + std::to_string(::getpid()))).string();
+  std::filesystem::remove_all(dir);
+  write_tum_folder(seq, dir);
+  const Trajectory gt = read_tum_trajectory(dir + "/groundtruth.txt");
+  ASSERT_EQ(gt.size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_DOUBLE_EQ(gt[i].timestamp_s, mesh_orbit_timestamp_s(i));
+    EXPECT_LT((gt[i].T_world_camera.translation() - mesh_orbit_pose(o, i).translation()).norm(), 1e-6);
+  }
+  const DepthImage d = load_depth(dir + "/depth/" + tum_stamp(0.0) + ".png");
+  EXPECT_NEAR(d(80, 60), 1.0, 1e-4);  // frame 0 looks straight at the square from 1 m
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

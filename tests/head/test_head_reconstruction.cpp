@@ -20,7 +20,7 @@
 #include "fusion/integrate.h"
 #include "fusion/mesh.h"
 #include "head/head_features.h"
-#include "head/mesh_file.h"
+#include "io/mesh_file.h"
 
 namespace hf::head {
 namespace {

@@ -1,4 +1,4 @@
-#include "head/mesh_file.h"
+#include "io/mesh_file.h"
 
 #include <filesystem>
 
@@ -6,7 +6,7 @@
 #include "io/obj.h"
 #include "io/ply.h"
 
-namespace hf::head {
+namespace hf {
 
 TriangleMesh read_mesh_file(const std::string& path) {
   const std::string ext = std::filesystem::path(path).extension().string();
@@ -15,4 +15,4 @@ TriangleMesh read_mesh_file(const std::string& path) {
   throw Error(path + ": expected a .ply or .obj mesh");
 }
 
-}  // namespace hf::head
+}  // namespace hf

@@ -1,4 +1,4 @@
-// A head mesh from a file, by extension: .ply (ASCII or binary, triangle strips included: io/ply.h) or .obj
+// A triangle mesh from a file, by extension: .ply (ASCII or binary, triangle strips included: io/ply.h) or .obj
 // (io/obj.h). Throws hf::Error naming the file for another extension or a malformed file.
 #pragma once
 
@@ -6,8 +6,8 @@
 
 #include "io/mesh.h"
 
-namespace hf::head {
+namespace hf {
 
 TriangleMesh read_mesh_file(const std::string& path);
 
-}  // namespace hf::head
+}  // namespace hf
