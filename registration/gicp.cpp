@@ -1,6 +1,7 @@
 #include "registration/gicp.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -67,9 +68,10 @@ class GicpMethod final : public DenseMethod {
  public:
   explicit GicpMethod(const GicpOptions& options) : options_(options), params_(options.kernel_params()) {}
   const DenseKernel& kernel() const override { return kKernel; }
-  void begin_level(int, const FramePyramidLevel& current, const FramePyramidLevel& reference,
+  void begin_level(int level, const FramePyramidLevel& current, const FramePyramidLevel& reference,
                    ResidualProblem& problem) override {
-    gicp_covariances(current.vertices, current.camera, options_, &cur_a_, &cur_b_);
+    params_.step = level == 0 ? options_.finest_level_gicp_step : 1;
+    gicp_covariances(current.vertices, current.camera, options_, &cur_a_, &cur_b_, params_.step);
     gicp_covariances(reference.vertices, reference.camera, options_, &ref_a_, &ref_b_);
     problem.set_map(HF_REG_IN_GICP_CUR_COV_A, cur_a_.data());
     problem.set_map(HF_REG_IN_GICP_CUR_COV_B, cur_b_.data());
@@ -77,9 +79,10 @@ class GicpMethod final : public DenseMethod {
     problem.set_map(HF_REG_IN_GICP_REF_COV_B, ref_b_.data());
   }
   const void* params() const override { return &params_; }
-  // Three rows per valid current pixel.
+  int pixel_step() const override { return std::max(1, params_.step); }
+  // Three rows per valid current pixel of the finest level's grid.
   double rows_possible(const FramePyramidLevel& current) const override {
-    return 3.0 * double(count_valid_pixels(current.vertices));
+    return 3.0 * double(count_valid_pixels(current.vertices, std::max(1, options_.finest_level_gicp_step)));
   }
 
  private:
@@ -98,14 +101,16 @@ std::unique_ptr<Registration> make(const RegistrationOptions& options, std::uniq
 }  // namespace
 
 void gicp_covariances(const VertexMap& vertices, const PinholeCamera& camera, const GicpOptions& options,
-                      std::vector<hf_float4>* a, std::vector<hf_float4>* b) {
+                      std::vector<hf_float4>* a, std::vector<hf_float4>* b, int step) {
+  step = std::max(1, step);
   const int w = vertices.width(), h = vertices.height();
   a->assign(size_t(w) * size_t(h), hf_invalid4());
   b->assign(size_t(w) * size_t(h), hf_invalid4());
   // The window's footprint per metre of depth, times the gate factor.
   const float gate_px_m = options.gicp_neighbour_gate * float(options.gicp_window_px) / float(camera.fx);
   parallel_for_rows(h, [&](int y) {
-    for (int x = 0; x < w; ++x) {
+    if (y % step != 0) return;
+    for (int x = 0; x < w; x += step) {
       Eigen::Matrix3f C;
       if (!pixel_covariance(vertices, x, y, gate_px_m, options, &C)) continue;
       const size_t i = size_t(y) * size_t(w) + size_t(x);
@@ -122,6 +127,7 @@ void GicpOptions::visit(OptionVisitor& v) {
   v("gicp_window_px", gicp_window_px);
   v("gicp_neighbour_gate", gicp_neighbour_gate);
   v("gicp_min_neighbours", gicp_min_neighbours);
+  v("finest_level_gicp_step", finest_level_gicp_step);
   v("robust_gicp", robust_gicp);
   v("huber_gicp_m", huber_gicp_m);
   v("t_sigma_gicp_m", t_sigma_gicp_m);
@@ -138,6 +144,7 @@ void GicpOptions::validate() const {
   require_option(finite_positive(gicp_neighbour_gate), "gicp_neighbour_gate must be finite and > 0");
   require_option(gicp_min_neighbours >= 3 && gicp_min_neighbours <= (2 * gicp_window_px + 1) * (2 * gicp_window_px + 1),
                  "gicp_min_neighbours must be in 3..(2 gicp_window_px + 1)^2");
+  require_option(finest_level_gicp_step >= 1 && finest_level_gicp_step <= 16, "finest_level_gicp_step must be in 1..16");
   require_option(finite_positive(huber_gicp_m), "huber_gicp_m must be finite and > 0");
   require_option(finite_positive(t_sigma_gicp_m), "t_sigma_gicp_m must be finite and > 0");
   require_option(finite_positive(t_dof_gicp), "t_dof_gicp must be finite and > 0");
@@ -150,6 +157,7 @@ hf_gicp_params GicpOptions::kernel_params() const {
   p.weight = 1.0f;
   p.residual_scale = std::sqrt(2.0f * gicp_epsilon);
   p.robust = robust_params(robust_gicp, huber_gicp_m, t_sigma_gicp_m, t_dof_gicp);
+  p.step = 1;
   return p;
 }
 

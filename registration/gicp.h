@@ -35,6 +35,11 @@ struct GicpOptions : MethodOptionsBase<GicpOptions> {
   float t_sigma_gicp_m = 0.01f;
   float t_dof_gicp = 5.0f;
 
+  // Rows at the finest level only for every step-th current pixel in x and y (coarser levels use every pixel; the
+  // reference keeps every pixel's covariance), as photometric's finest_level_photometric_step: the covariances
+  // and the three rows per pixel cost ~30x icp's one (bench/results/registration.md, "gicp").
+  int finest_level_gicp_step = 2;
+
   void visit(OptionVisitor& v) override;
   void validate() const override;
   hf_gicp_params kernel_params() const;
@@ -42,8 +47,9 @@ struct GicpOptions : MethodOptionsBase<GicpOptions> {
 
 // Segal's regularised covariances of a vertex map into two hf_float4 maps (layout in gicp_kernel.h; w of b is 1
 // where valid, every field 0 where not). Deterministic, parallel over rows; a and b are resized.
+// step > 1: only pixels with x and y multiples of step get one (the others are invalid).
 void gicp_covariances(const VertexMap& vertices, const PinholeCamera& camera, const GicpOptions& options,
-                      std::vector<hf_float4>* a, std::vector<hf_float4>* b);
+                      std::vector<hf_float4>* a, std::vector<hf_float4>* b, int step = 1);
 
 RegistrationMethod gicp_registration_method();
 

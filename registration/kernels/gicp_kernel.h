@@ -32,6 +32,7 @@ typedef struct {
   float weight;          // term weight of the rows (1 alone)
   float residual_scale;  // s = sqrt(2 epsilon)
   hf_reg_robust robust;  // scale in metres, of |r|
+  int step;              // rows only for current pixels with x and y multiples of this (<= 1: every pixel)
 } hf_gicp_params;
 
 // C_ref + R C_cur R^T from the packed covariances (c[0..5] = xx, xy, xz, yy, yz, zz).
@@ -83,6 +84,7 @@ HF_INLINE int hf_gicp_inverse_cholesky(const float* c, float* li) {
 // covariances, else 0. The current and the reference camera share K.
 HF_INLINE int hf_gicp_pixel(int x, int y, const hf_reg_maps* maps, hf_intrinsics K, hf_transform12 T,
                             hf_gicp_params p, hf_reg_row* rows) {
+  if (p.step > 1 && ((x % p.step) != 0 || (y % p.step) != 0)) return 0;
   const int idx = y * K.width + x;
   const hf_float4 vc = hf_reg_map4(maps, HF_REG_IN_CUR_VERTICES)[idx];
   const hf_float4 nc = hf_reg_map4(maps, HF_REG_IN_CUR_NORMALS)[idx];
