@@ -26,13 +26,14 @@ struct RecordOptions {
 void record(const RecordOptions& o) {
   if (!is_live_input(o.input))
     throw Error(o.input + ": not a live input (openni2://[URI], FILE.oni, v4l2:///dev/videoN, libcamera://[ID])");
-  if (o.frames == 0 && o.seconds == 0.0 && o.input.find(".oni") == std::string::npos)
-    std::cerr << "recording until Ctrl-C (give --frames N or --seconds S to stop on its own)\n";
   const LiveInputOptions options = live_input_options(o.live_mode, o.camera);
+  check_new_record_folder(o.out);  // before the device starts, not after
   InterruptGuard guard;
   std::unique_ptr<FrameSource> source = open_live_input(o.input, options);
   std::cerr << "input: " << source->name() << "\ncamera: " << source->camera().describe() << " ("
             << source->camera_origin() << ")\n";
+  if (o.frames == 0 && o.seconds == 0.0 && source->size() == kUnknownFrameCount)
+    std::cerr << "recording until Ctrl-C (give --frames N or --seconds S to stop on its own)\n";
   Progress progress("record", o.frames);
   RecordLimits limits;
   limits.frames = o.frames;

@@ -2,6 +2,8 @@
 
 #include <sys/mman.h>
 
+#include <cstdlib>
+
 #include <condition_variable>
 #include <deque>
 #include <libcamera/libcamera.h>
@@ -16,7 +18,12 @@ namespace {
 namespace lc = libcamera;
 
 // libcamera logs INFO and WARN lines to stderr by default; hashfusion's own messages say what matters.
-void quiet_libcamera() { lc::logSetLevel("*", "ERROR"); }
+// Categories made later keep the default level, so the environment variable libcamera reads at start-up is set
+// too (unless the user set it).
+void quiet_libcamera() {
+  ::setenv("LIBCAMERA_LOG_LEVELS", "*:ERROR", 0);
+  lc::logSetLevel("*", "ERROR");
+}
 
 std::string camera_ids(lc::CameraManager& manager) {
   std::string s;

@@ -46,6 +46,20 @@ struct CaptureResult {
   std::string message;  // failed: "openni2://...: what happened" (one line)
 };
 
+// The two results a back-end's grab() builds: a frame, and a failure "DEVICE: what".
+inline CaptureResult capture_frame(CapturedFrame frame) {
+  CaptureResult r;
+  r.status = CaptureStatus::frame;
+  r.frame = std::move(frame);
+  return r;
+}
+inline CaptureResult capture_failed(const std::string& device_name, const std::string& what) {
+  CaptureResult r;
+  r.status = CaptureStatus::failed;
+  r.message = device_name + ": " + what;
+  return r;
+}
+
 // A back-end's device, opened and streaming. Implementations: io/openni2_capture.h, io/v4l2_capture.h,
 // io/libcamera_capture.h. Called from the LiveSource's capture thread only (accessors: any thread, fixed at
 // construction).

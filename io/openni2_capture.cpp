@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
 #include <optional>
 #include <thread>
 
@@ -28,16 +29,20 @@ std::string extended_error() {
   return e.empty() ? "no detail from OpenNI2" : e;
 }
 
-// OpenNI2 counts initialize / shutdown pairs, so each user holds one.
+// OpenNI2 is initialised once per process and never shut down: shutdown() unloads the driver modules, and the
+// drivers keep allocations they only free at unload (LeakSanitizer then reports them from unloaded code that no
+// suppression can name). Initialising again after a failure retries.
 class OpenNiContext {
  public:
   OpenNiContext() {
+    static std::mutex mutex;
+    static bool initialised = false;
+    std::lock_guard<std::mutex> lock(mutex);
+    if (initialised) return;
     if (ni::OpenNI::initialize() != ni::STATUS_OK)
       throw Error("OpenNI2: cannot initialise (" + extended_error() + ")");
+    initialised = true;
   }
-  ~OpenNiContext() { ni::OpenNI::shutdown(); }
-  OpenNiContext(const OpenNiContext&) = delete;
-  OpenNiContext& operator=(const OpenNiContext&) = delete;
 };
 
 std::string format_name(ni::PixelFormat f) {
@@ -234,11 +239,7 @@ class OpenNi2Capture : public CaptureDevice {
       } catch (const Error& e) {
         return failed(e.what());
       }
-      if (auto pair = pairer_.take()) {
-        r.status = CaptureStatus::frame;
-        r.frame = std::move(*pair);
-        return r;
-      }
+      if (auto pair = pairer_.take()) return capture_frame(std::move(*pair));
     }
   }
 
@@ -248,12 +249,7 @@ class OpenNi2Capture : public CaptureDevice {
   std::optional<size_t> frame_count() const override { return frames_; }
 
  private:
-  CaptureResult failed(const std::string& what) const {
-    CaptureResult r;
-    r.status = CaptureStatus::failed;
-    r.message = name_ + ": " + what;
-    return r;
-  }
+  CaptureResult failed(const std::string& what) const { return capture_failed(name_, what); }
 
   void configure_modes() {
     const ni::SensorInfo* di = device_.getSensorInfo(ni::SENSOR_DEPTH);

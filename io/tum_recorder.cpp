@@ -38,13 +38,18 @@ void write_list(const std::string& path, const std::string& what, const std::str
 
 }  // namespace
 
-RecordResult record_tum_folder(FrameSource& source, const std::string& dir_in, const RecordLimits& limits) {
-  std::string dir = dir_in;
-  while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
+void check_new_record_folder(const std::string& dir) {
   if (dir.empty()) throw Error("record: expected a non-empty output folder");
   std::error_code ec;
   if (fs::exists(fs::symlink_status(dir, ec)))
     throw Error(dir + ": already exists (record writes a new folder; choose another name)");
+}
+
+RecordResult record_tum_folder(FrameSource& source, const std::string& dir_in, const RecordLimits& limits) {
+  std::string dir = dir_in;
+  while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
+  check_new_record_folder(dir);
+  std::error_code ec;
   if (const fs::path parent = fs::path(dir).parent_path(); !parent.empty()) fs::create_directories(parent, ec);
   const std::string tmp = make_private_folder_beside(dir);
   RecordResult result;

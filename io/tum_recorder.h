@@ -39,6 +39,10 @@ struct RecordResult {
   std::optional<CaptureStats> capture;
 };
 
+// hf::Error "DIR: already exists ..." when DIR exists (a link included); the check record_tum_folder starts with,
+// for callers that want it before opening a device.
+void check_new_record_folder(const std::string& dir);
+
 // Throws hf::Error naming DIR: it exists, its parent is not writable, a file cannot be written, or no frame came.
 RecordResult record_tum_folder(FrameSource& source, const std::string& dir, const RecordLimits& limits = {});
 

@@ -136,7 +136,8 @@ class V4l2Node {
   int height() const { return height_; }
 
   // Dequeues one filled buffer (poll said it is readable), decodes it with `decode`, and queues it again.
-  // Returns false with `error` set when the node failed; true with nothing decoded on EAGAIN.
+  // Returns false with `error` set when the node failed; true otherwise (nothing decoded on EAGAIN or for a
+  // corrupt buffer).
   template <class Decode>
   bool dequeue(Decode&& decode, std::string& error) {
     v4l2_buffer buf{};
@@ -148,21 +149,19 @@ class V4l2Node {
       return false;
     }
     const double stamp_s = double(buf.timestamp.tv_sec) + 1e-6 * double(buf.timestamp.tv_usec);
-    bool ok = true;
     if (buf.index < buffers_.size() && !(buf.flags & V4L2_BUF_FLAG_ERROR)) {
       const auto* data = static_cast<const std::uint8_t*>(buffers_[buf.index].first);
       try {
         decode(stamp_s, data, std::min<size_t>(buf.bytesused, buffers_[buf.index].second));
-      } catch (const Error& e) {
-        error = e.what();  // a corrupt frame (e.g. a truncated MJPEG): skipped, not fatal
-        ok = true;
+      } catch (const Error&) {
+        // A corrupt frame (a truncated MJPEG transfer): skipped, the stream goes on.
       }
     }
     if (xioctl(fd_, VIDIOC_QBUF, &buf) != 0) {
       error = "VIDIOC_QBUF failed (" + errno_text() + ")";
       return false;
     }
-    return ok;
+    return true;
   }
 
   DepthImage depth(const std::uint8_t* data, size_t bytes, double unit_m) const {
@@ -259,16 +258,8 @@ class V4l2Capture : public CaptureDevice {
             },
             error);
         if (!alive) return failed(node.path() + ": " + error);
-        if (single) {
-          r.status = CaptureStatus::frame;
-          r.frame = std::move(*single);
-          return r;
-        }
-        if (auto pair = pairer_.take()) {
-          r.status = CaptureStatus::frame;
-          r.frame = std::move(*pair);
-          return r;
-        }
+        if (single) return capture_frame(std::move(*single));
+        if (auto pair = pairer_.take()) return capture_frame(std::move(*pair));
       }
     }
   }
@@ -279,12 +270,7 @@ class V4l2Capture : public CaptureDevice {
 
  private:
   nfds_t nodes_t() const { return nfds_t(nodes_.size()); }
-  CaptureResult failed(const std::string& what) const {
-    CaptureResult r;
-    r.status = CaptureStatus::failed;
-    r.message = name_ + ": " + what;
-    return r;
-  }
+  CaptureResult failed(const std::string& what) const { return capture_failed(name_, what); }
 
   LiveInputOptions options_;
   StampPairer pairer_;

@@ -1,8 +1,6 @@
 #include "viewer/gl_context.h"
 
-#define GL_GLEXT_PROTOTYPES 1
-#include <GL/gl.h>
-#include <GLFW/glfw3.h>
+#include "viewer/gl_util.h"
 
 #include <mutex>
 

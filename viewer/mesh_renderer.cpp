@@ -1,13 +1,10 @@
 #include "viewer/mesh_renderer.h"
 
-#define GL_GLEXT_PROTOTYPES 1
-#include <GL/gl.h>
-#include <GL/glext.h>
-
 #include <glm/glm.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
 #include "core/error.h"
+#include "viewer/gl_util.h"
 
 namespace hf::viewer {
 namespace {
@@ -97,34 +94,6 @@ out vec4 frag;
 void main() { frag = vec4(color, 1.0); }
 )";
 
-GLuint compile(GLenum type, const char* source) {
-  const GLuint s = glCreateShader(type);
-  glShaderSource(s, 1, &source, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[1024] = {};
-    glGetShaderInfoLog(s, sizeof log, nullptr, log);
-    throw Error(std::string("viewer: shader does not compile: ") + log);
-  }
-  return s;
-}
-
-GLuint program(const char* vs, const char* fs) {
-  const GLuint v = compile(GL_VERTEX_SHADER, vs), f = compile(GL_FRAGMENT_SHADER, fs);
-  const GLuint p = glCreateProgram();
-  glAttachShader(p, v);
-  glAttachShader(p, f);
-  glLinkProgram(p);
-  glDeleteShader(v);
-  glDeleteShader(f);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) throw Error("viewer: shader program does not link");
-  return p;
-}
-
 }  // namespace
 
 struct MeshRenderer::Gl {
@@ -137,9 +106,9 @@ struct MeshRenderer::Gl {
 };
 
 MeshRenderer::MeshRenderer() : gl_(std::make_unique<Gl>()) {
-  gl_->mesh_program = program(kMeshVertex, kMeshFragment);
-  gl_->line_program = program(kLineVertex, kLineFragment);
-  gl_->point_program = program(kPointVertex, kPointFragment);
+  gl_->mesh_program = link_program(kMeshVertex, kMeshFragment);
+  gl_->line_program = link_program(kLineVertex, kLineFragment);
+  gl_->point_program = link_program(kPointVertex, kPointFragment);
   glGenVertexArrays(1, &gl_->point_vao);
   glGenBuffers(1, &gl_->point_vbo);
   glGenVertexArrays(1, &gl_->vao);
@@ -307,6 +276,33 @@ ColorImage MeshRenderer::render(const PinholeCamera& camera, const SE3& T_world_
     for (int x = 0; x < camera.width; ++x) out(x, y) = {row[4 * x], row[4 * x + 1], row[4 * x + 2]};
   }
   return out;
+}
+
+GLuint link_program(const char* vertex_source, const char* fragment_source) {
+  auto compile = [](GLenum type, const char* source) {
+    const GLuint s = glCreateShader(type);
+    glShaderSource(s, 1, &source, nullptr);
+    glCompileShader(s);
+    GLint ok = 0;
+    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+      char log[1024] = {};
+      glGetShaderInfoLog(s, sizeof log, nullptr, log);
+      throw Error(std::string("viewer: shader does not compile: ") + log);
+    }
+    return s;
+  };
+  const GLuint v = compile(GL_VERTEX_SHADER, vertex_source), f = compile(GL_FRAGMENT_SHADER, fragment_source);
+  const GLuint p = glCreateProgram();
+  glAttachShader(p, v);
+  glAttachShader(p, f);
+  glLinkProgram(p);
+  glDeleteShader(v);
+  glDeleteShader(f);
+  GLint ok = 0;
+  glGetProgramiv(p, GL_LINK_STATUS, &ok);
+  if (!ok) throw Error("viewer: shader program does not link");
+  return p;
 }
 
 Polyline camera_frustum(const PinholeCamera& c, const SE3& T_world_camera, double depth_m, Rgb8 color) {

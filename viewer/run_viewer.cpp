@@ -1,10 +1,5 @@
 #include "viewer/run_viewer.h"
 
-#define GL_GLEXT_PROTOTYPES 1
-#include <GL/gl.h>
-#include <GL/glext.h>
-#include <GLFW/glfw3.h>
-
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
@@ -17,6 +12,7 @@
 #include "core/error.h"
 #include "io/image_io.h"
 #include "viewer/gl_context.h"
+#include "viewer/gl_util.h"
 #include "viewer/mesh_renderer.h"
 
 namespace hf::viewer {
@@ -37,23 +33,6 @@ uniform sampler2D image;
 out vec4 frag;
 void main() { frag = vec4(texture(image, uv).rgb, 1.0); }
 )";
-
-GLuint quad_program() {
-  auto compile = [](GLenum type, const char* src) {
-    const GLuint s = glCreateShader(type);
-    glShaderSource(s, 1, &src, nullptr);
-    glCompileShader(s);
-    return s;
-  };
-  const GLuint v = compile(GL_VERTEX_SHADER, kQuadVertex), f = compile(GL_FRAGMENT_SHADER, kQuadFragment);
-  const GLuint p = glCreateProgram();
-  glAttachShader(p, v);
-  glAttachShader(p, f);
-  glLinkProgram(p);
-  glDeleteShader(v);
-  glDeleteShader(f);
-  return p;
-}
 
 // The free camera's intrinsics for a viewport: a 60-degree-ish horizontal field of view.
 PinholeCamera view_camera(int w, int h) {
@@ -216,7 +195,7 @@ void RunViewer::Impl::render_window(GlContext& context, MeshRenderer& renderer) 
   glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) {
     static_cast<Impl*>(glfwGetWindowUserPointer(w))->controller.scroll(dy);
   });
-  const GLuint quad = quad_program();
+  const GLuint quad = link_program(kQuadVertex, kQuadFragment);
   GLuint vao = 0, vbo = 0, textures[2] = {0, 0};
   const float corners[] = {0, 0, 1, 0, 0, 1, 1, 1};
   glGenVertexArrays(1, &vao);
@@ -232,19 +211,14 @@ void RunViewer::Impl::render_window(GlContext& context, MeshRenderer& renderer) 
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   }
-  double last_x = 0, last_y = 0;
-  glfwGetCursorPos(window, &last_x, &last_y);
+  OrbitInput orbit(window);
   long seen = -1;
   bool mesh_loaded = false;
   std::vector<Polyline> l;
   std::optional<SE3> current;
   while (!glfwWindowShouldClose(window) && !controller.quit_flag()->load()) {
     glfwWaitEventsTimeout(1.0 / 30.0);
-    double x = 0, y = 0;
-    glfwGetCursorPos(window, &x, &y);
-    if (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) controller.drag(x - last_x, y - last_y);
-    last_x = x;
-    last_y = y;
+    orbit.poll(controller);
     {
       std::lock_guard<std::mutex> lock(mutex);
       if (version != seen) {

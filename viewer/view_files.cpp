@@ -1,9 +1,5 @@
 #include "viewer/view_files.h"
 
-#define GL_GLEXT_PROTOTYPES 1
-#include <GL/gl.h>
-#include <GLFW/glfw3.h>
-
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -15,6 +11,7 @@
 #include "io/ply.h"
 #include "io/trajectory_io.h"
 #include "viewer/gl_context.h"
+#include "viewer/gl_util.h"
 #include "viewer/mesh_renderer.h"
 #include "viewer/view_controller.h"
 
@@ -107,15 +104,10 @@ void view_files(const std::string& path, const ViewFilesOptions& options) {
   glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) {
     static_cast<ViewController*>(glfwGetWindowUserPointer(w))->scroll(dy);
   });
-  double lx = 0, ly = 0;
-  glfwGetCursorPos(window, &lx, &ly);
+  OrbitInput orbit(window);
   while (!glfwWindowShouldClose(window) && !controller.quit_flag()->load()) {
     glfwWaitEventsTimeout(1.0 / 30.0);
-    double x = 0, y = 0;
-    glfwGetCursorPos(window, &x, &y);
-    if (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) controller.drag(x - lx, y - ly);
-    lx = x;
-    ly = y;
+    orbit.poll(controller);
     if (controller.follow()) controller.reset(start);
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window, &fw, &fh);
