@@ -169,6 +169,7 @@ void visit(V&& v, ReintegrationOptions& o) {
   v("min_translation_m", o.min_translation_m);
   v("min_rotation_deg", o.min_rotation_deg);
   v("frames_per_step", o.frames_per_step);
+  v("frames_after_loop", o.frames_after_loop);
   v("memory_budget_mb", o.memory_budget_mb);
 }
 template <class V>

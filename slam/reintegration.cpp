@@ -15,6 +15,8 @@ void ReintegrationOptions::validate() const {
   if (!(min_rotation_deg >= 0) || !std::isfinite(min_rotation_deg))
     throw Error("reintegration.min_rotation_deg must be >= 0");
   if (frames_per_step < 0 || frames_per_step > 1000) throw Error("reintegration.frames_per_step must be in [0, 1000]");
+  if (frames_after_loop < 0 || frames_after_loop > 100000)
+    throw Error("reintegration.frames_after_loop must be in [0, 100000]");
   if (!(memory_budget_mb >= 0) || !std::isfinite(memory_budget_mb))
     throw Error("reintegration.memory_budget_mb must be >= 0");
 }
