@@ -1,0 +1,63 @@
+# `hashfusion model` end to end (ctest -P script): bad input exits 1 with one line naming the file; on the Middlebury
+# templeRing cameras (when ../shared is present) a triangle sketched in three shots (the projections of
+# (0, 0, -0.06), (0.05, 0.02, -0.05), (0.02, 0.09, -0.04), rounded to 1e-3 px) comes back green by DLT within
+# 1e-4 units, and the one-shot polygon without a cloud is red.
+# Variables: HASHFUSION, DATA (the Middlebury folder), WORK (a scratch folder).
+cmake_policy(SET CMP0054 NEW)
+file(REMOVE_RECURSE ${WORK})
+file(MAKE_DIRECTORY ${WORK})
+set(views "{\"shot\": \"templeR0013.png\", \"points\": [[238.443, 245.459], [310.468, 177.614], [489.733, 256.202]]},
+  {\"shot\": \"templeR0016.png\", \"points\": [[238.168, 219.467], [312.754, 203.394], [489.489, 261.604]]},
+  {\"shot\": \"templeR0019.png\", \"points\": [[239.775, 195.375], [313.517, 232.839], [489.206, 261.95]]}")
+file(WRITE ${WORK}/sketch.json "{\"polygons\": [{\"id\": \"tri\", \"views\": [${views}]},
+  {\"id\": \"one\", \"views\": [{\"shot\": \"templeR0013.png\", \"points\": [[10, 10], [50, 10], [50, 40]]}]}]}")
+file(WRITE ${WORK}/bad.json "{\"polygons\": [{\"id\": \"p\", \"views\": [{\"shot\": \"nope.png\", \"points\": [[1, 1], [5, 1], [5, 5]]}]}]}")
+
+if(NOT EXISTS ${DATA})
+  message(STATUS "skipped: ${DATA} not found (../shared absent)")
+  return()
+endif()
+execute_process(COMMAND ${HASHFUSION} model --shots ${DATA} --polygons ${WORK}/bad.json --out ${WORK}/bad_out
+                RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_QUIET)
+if(NOT rc EQUAL 1 OR NOT err MATCHES "bad.json: polygon 'p' view 1: no shot named 'nope.png'")
+  message(FATAL_ERROR "unknown shot: expected exit 1 naming the sketch, got ${rc}: ${err}")
+endif()
+string(REGEX MATCHALL "\n" lines "${err}")
+list(LENGTH lines n)
+if(NOT n EQUAL 1)
+  message(FATAL_ERROR "unknown shot: expected one line on stderr, got: ${err}")
+endif()
+
+execute_process(COMMAND ${HASHFUSION} model --shots ${DATA} --polygons ${WORK}/sketch.json --out ${WORK}/out
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "model failed (${rc}): ${err}")
+endif()
+file(READ ${WORK}/out/polygons.json json)
+string(JSON state GET "${json}" polygons 0 guidance)
+string(JSON method GET "${json}" polygons 0 method)
+string(JSON second_state GET "${json}" polygons 1 guidance)
+if(NOT state STREQUAL "green" OR NOT method STREQUAL "dlt" OR NOT second_state STREQUAL "red")
+  message(FATAL_ERROR "expected tri green by dlt and one red, got ${state} ${method} / ${second_state}")
+endif()
+# CMake has no floating-point maths: the printed numbers are matched. Pixel rounding of 1e-3 px at f = 1520 px and
+# 0.5 units moves a point by ~3e-7 units, so x and y print below 1e-4 and z as -0.0599.. or -0.0600...
+foreach(c 0 1)
+  string(JSON x GET "${json}" polygons 0 vertices 0 ${c})
+  if(NOT x MATCHES "^-?[0-9.]+e-(0[5-9]|[1-9][0-9])$" AND NOT x MATCHES "^-?0(\\.0000[0-9]*)?$")
+    message(FATAL_ERROR "vertex 0 coordinate ${c}: expected within 1e-4 of 0, got ${x}")
+  endif()
+endforeach()
+string(JSON z GET "${json}" polygons 0 vertices 0 2)
+if(NOT z MATCHES "^-0\\.0(5999|6000)")
+  message(FATAL_ERROR "vertex 0 z: expected within 1e-4 of -0.06, got ${z}")
+endif()
+foreach(f model.obj model.mtl textures/0_tri.png overlays/templeR0013.png)
+  if(NOT EXISTS ${WORK}/out/${f})
+    message(FATAL_ERROR "missing output ${f}")
+  endif()
+endforeach()
+file(GLOB_RECURSE leftovers ${WORK}/out/.*)
+if(leftovers)
+  message(FATAL_ERROR "temporary files left: ${leftovers}")
+endif()
