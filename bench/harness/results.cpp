@@ -139,18 +139,28 @@ MachineInfo current_machine(const std::string& source_dir, const std::string& co
   return m;
 }
 
-Outcome compare_runs(const RunRow& a, const RunRow& b) {
-  const bool ca = a.comparable(), cb = b.comparable();
+std::optional<double> run_error(const RunRow& run, ErrorMetric metric) {
+  return metric == ErrorMetric::ate_rmse ? run.ate_rmse_m : run.rpe_trans_m_per_s;
+}
+
+bool comparable_by(const RunRow& run, ErrorMetric metric) {
+  const std::optional<double> e = run_error(run, metric);
+  return run.comparable() && e && std::isfinite(*e);
+}
+
+Outcome compare_runs(const RunRow& a, const RunRow& b, ErrorMetric metric) {
+  const bool ca = comparable_by(a, metric), cb = comparable_by(b, metric);
   if (!ca && !cb) return Outcome::tie;
   if (ca != cb) return ca ? Outcome::win : Outcome::loss;
-  const double ea = *a.ate_rmse_m, eb = *b.ate_rmse_m;
+  const double ea = *run_error(a, metric), eb = *run_error(b, metric);
   if (std::abs(ea - eb) <= kTieRelative * std::max(ea, eb)) return Outcome::tie;
   return ea < eb ? Outcome::win : Outcome::loss;
 }
 
-WltTable won_lost_tie(const std::vector<RunRow>& runs, const std::vector<std::string>& order) {
+WltTable won_lost_tie(const std::vector<RunRow>& runs, const std::vector<std::string>& order, ErrorMetric metric) {
   WltTable t;
   t.methods = order;
+  t.metric = metric == ErrorMetric::ate_rmse ? "ATE RMSE" : "translational RPE";
   const size_t n = order.size();
   t.wlt.assign(n, std::vector<WltCell>(n));
   t.ratio.assign(n, std::vector<std::optional<double>>(n));
@@ -165,15 +175,15 @@ WltTable won_lost_tie(const std::vector<RunRow>& runs, const std::vector<std::st
       for (size_t c = 0; c < n; ++c) {
         const auto cc = group.by_method.find(order[c]);
         if (c == r || cc == group.by_method.end()) continue;
-        switch (compare_runs(*cc->second, *rr->second)) {
+        switch (compare_runs(*cc->second, *rr->second, metric)) {
           case Outcome::win: ++t.wlt[r][c].wins; break;
           case Outcome::loss: ++t.wlt[r][c].losses; break;
           case Outcome::tie: ++t.wlt[r][c].ties; break;
         }
-        if (rr->second->comparable() && cc->second->comparable()) {
+        if (comparable_by(*rr->second, metric) && comparable_by(*cc->second, metric)) {
           ++t.common_inputs[r][c];
-          sum_r[r][c] += *rr->second->ate_rmse_m;
-          sum_c[r][c] += *cc->second->ate_rmse_m;
+          sum_r[r][c] += *run_error(*rr->second, metric);
+          sum_c[r][c] += *run_error(*cc->second, metric);
         }
       }
     }
@@ -209,11 +219,11 @@ std::string format_wlt_markdown(const WltTable& t) {
     md << "\n";
   }
   md << "\nBelow the diagonal: wins-losses-ties of the **column** method against the **row** method over the "
-     << t.inputs << " input(s) with ground truth, by ATE RMSE. A tie is two ATEs within "
+     << t.inputs << " input(s) with ground truth, by " << t.metric << ". A tie is two errors within "
      << int(std::lround(kTieRelative * 100)) << "% of the larger one, or both runs lost; a run is lost when it "
      << "failed, has no ATE, or lost more than " << int(std::lround(kMaxLostFraction * 100))
      << "% of its frames, and any tracked run beats a lost one. Above the diagonal: ME(row) / ME(column), the "
-     << "ratio of mean ATE RMSE over the inputs on which both tracked (below 1: the row method is more accurate). "
+     << "ratio of mean " << t.metric << " over the inputs on which both tracked (below 1: the row method is more accurate). "
      << "This is the form of Table 1 of the registration report (Stotko 2016, eq. 76).\n";
   return md.str();
 }
@@ -404,6 +414,9 @@ std::vector<RunRow> results_from_csv(const std::string& text, const std::string&
 
 // ---------------------------------------------------------------------------------------------------- JSON
 
+// The won-lost-tie table's JSON form (results.h).
+static nlohmann::json wlt_to_json(const WltTable& t);
+
 nlohmann::json results_to_json(const BenchResults& results) {
   nlohmann::json j;
   const MachineInfo& m = results.machine;
@@ -442,7 +455,12 @@ nlohmann::json results_to_json(const BenchResults& results) {
                     {"worst_frame_ms", r.worst_frame_ms}});
   }
   j["runs"] = runs;
-  const WltTable t = won_lost_tie(results.runs, results.methods);
+  j["won_lost_tie"] = wlt_to_json(won_lost_tie(results.runs, results.methods));
+  j["won_lost_tie_rpe"] = wlt_to_json(won_lost_tie(results.runs, results.methods, ErrorMetric::rpe_translation));
+  return j;
+}
+
+static nlohmann::json wlt_to_json(const WltTable& t) {
   nlohmann::json wlt = nlohmann::json::array(), ratio = nlohmann::json::array();
   for (size_t r = 0; r < t.methods.size(); ++r) {
     nlohmann::json wrow = nlohmann::json::array(), rrow = nlohmann::json::array();
@@ -457,15 +475,13 @@ nlohmann::json results_to_json(const BenchResults& results) {
     wlt.push_back(wrow);
     ratio.push_back(rrow);
   }
-  j["won_lost_tie"] = {{"methods", t.methods},
-                       {"inputs", t.inputs},
-                       {"wlt", wlt},
-                       {"ratio", ratio},
-                       {"rule",
-                        "wlt[r][c] = [wins, losses, ties] of method c against method r by ATE RMSE; tie within 5% "
-                        "or both lost (failed, no ATE, or more than 50% of frames lost); ratio[r][c] = "
-                        "ME(r) / ME(c), mean ATE RMSE over the inputs on which both tracked"}};
-  return j;
+  return {{"methods", t.methods},
+          {"inputs", t.inputs},
+          {"wlt", wlt},
+          {"ratio", ratio},
+          {"rule", "wlt[r][c] = [wins, losses, ties] of method c against method r by " + t.metric +
+                       "; tie within 5% or both lost (failed, no ATE, or more than 50% of frames lost); "
+                       "ratio[r][c] = ME(r) / ME(c), mean " + t.metric + " over the inputs on which both tracked"}};
 }
 
 BenchResults results_from_json(const nlohmann::json& j, const std::string& file) {
@@ -586,6 +602,8 @@ std::string results_to_markdown(const BenchResults& results, const std::vector<s
         "table below compares them on the same inputs).\n\n";
 
   md << "## Won-lost-tie (ATE RMSE)\n\n" << format_wlt_markdown(won_lost_tie(results.runs, results.methods)) << "\n";
+  md << "## Won-lost-tie (translational RPE)\n\n"
+     << format_wlt_markdown(won_lost_tie(results.runs, results.methods, ErrorMetric::rpe_translation)) << "\n";
 
   if (!plot_files.empty()) {
     md << "## Speed against error\n\n";

@@ -75,8 +75,13 @@ struct BenchResults {
 };
 
 enum class Outcome { win, loss, tie };
+// The error a table compares: ATE RMSE (m) or translational RPE (m/s), both as the TUM tools compute them. The
+// rules above apply to either; a run is comparable by RPE when it is comparable and has an RPE.
+enum class ErrorMetric { ate_rmse, rpe_translation };
+std::optional<double> run_error(const RunRow& run, ErrorMetric metric);
+bool comparable_by(const RunRow& run, ErrorMetric metric);
 // The outcome for `a` against `b` on one input (rules above).
-Outcome compare_runs(const RunRow& a, const RunRow& b);
+Outcome compare_runs(const RunRow& a, const RunRow& b, ErrorMetric metric = ErrorMetric::ate_rmse);
 
 struct WltCell {
   int wins = 0, losses = 0, ties = 0;  // of the column method against the row method
@@ -90,12 +95,14 @@ struct WltTable {
   std::vector<std::vector<std::optional<double>>> ratio;
   std::vector<std::vector<int>> common_inputs;  // inputs behind ratio[r][c]
   int inputs = 0;                                // inputs with ground truth taking part
+  std::string metric = "ATE RMSE";               // the error compared ("translational RPE" for rpe_translation)
 };
 
 // Methods are identified by display_name(); `order` gives the row order (names missing from the runs are kept
 // with empty rows). Runs without ground truth (no ATE and not failed, on an input where no run has an ATE) are
 // left out.
-WltTable won_lost_tie(const std::vector<RunRow>& runs, const std::vector<std::string>& order);
+WltTable won_lost_tie(const std::vector<RunRow>& runs, const std::vector<std::string>& order,
+                      ErrorMetric metric = ErrorMetric::ate_rmse);
 // Markdown of the table in the report's form, with the rule underneath.
 std::string format_wlt_markdown(const WltTable& table);
 
@@ -124,7 +131,8 @@ std::string results_to_csv(const std::vector<RunRow>& runs);
 std::vector<RunRow> results_from_csv(const std::string& text, const std::string& file);
 
 // results.json: {"machine": {...}, "settings", "methods", "inputs", "notes", "runs": [...],
-//                "won_lost_tie": {"methods", "wlt", "ratio", "rule"}}; null for missing numbers.
+//                "won_lost_tie": {"methods", "wlt", "ratio", "rule"}, "won_lost_tie_rpe": the same by RPE};
+// null for missing numbers.
 nlohmann::json results_to_json(const BenchResults& results);
 BenchResults results_from_json(const nlohmann::json& j, const std::string& file);
 

@@ -89,6 +89,28 @@ TEST(BenchResults, WonLostTieAndRatios) {
   EXPECT_EQ(t.common_inputs[0][2], 1);
 }
 
+// The same table by translational RPE: each run's RPE decides, and a run without an RPE is lost for it even when
+// it has an ATE. Here every RPE is ten times the ATE except A's on i1, which is worse than B's: A vs B on i1
+// becomes a loss, the ratios follow the RPEs.
+TEST(BenchResults, WonLostTieByRpe) {
+  std::vector<RunRow> runs = example();
+  for (RunRow& r : runs) {
+    if (r.ate_rmse_m) r.rpe_trans_m_per_s = 10.0 * *r.ate_rmse_m;
+    if (r.method == "A" && r.input == "i1") r.rpe_trans_m_per_s = 0.5;
+  }
+  const WltTable ate = won_lost_tie(runs, {"A", "B", "C"});
+  const WltTable rpe = won_lost_tie(runs, {"A", "B", "C"}, ErrorMetric::rpe_translation);
+  EXPECT_EQ(ate.wlt[1][0].wins, 1);
+  EXPECT_EQ(rpe.wlt[1][0].wins, 0);  // i1: A's RPE 0.5 against B's 0.2
+  EXPECT_EQ(rpe.wlt[1][0].losses, 3);
+  ASSERT_TRUE(rpe.ratio[0][1]);
+  EXPECT_NEAR(*rpe.ratio[0][1], (0.5 + 0.30) / (0.20 + 0.15), 1e-12);
+  EXPECT_NE(format_wlt_markdown(rpe).find("by translational RPE"), std::string::npos);
+  runs[0].rpe_trans_m_per_s.reset();  // A on i1 without an RPE: lost by RPE, still tracked by ATE
+  EXPECT_EQ(compare_runs(runs[0], runs[1], ErrorMetric::rpe_translation), Outcome::loss);
+  EXPECT_EQ(compare_runs(runs[0], runs[1]), Outcome::win);
+}
+
 TEST(BenchResults, WltMarkdownHasTheReportsForm) {
   const std::string md = format_wlt_markdown(won_lost_tie(example(), {"A", "B", "C"}));
   EXPECT_NE(md.find("| **B** | 1-2-1 | | 1.389 |"), std::string::npos) << md;
