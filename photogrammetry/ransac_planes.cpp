@@ -1,6 +1,7 @@
 #include "photogrammetry/ransac_planes.h"
 
 #include <pcl/ModelCoefficients.h>
+#include <pcl/console/print.h>
 #include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_types.h>
 #include <pcl/sample_consensus/method_types.h>
@@ -83,6 +84,8 @@ std::vector<PlaneSegment> segment_planes_ransac(const std::vector<Eigen::Vector3
   std::vector<int> remaining(points.size());
   for (size_t i = 0; i < points.size(); ++i) remaining[i] = int(i);
 
+  // PCL prints "sample points too similar or collinear" for every rejected sample of a cloud with duplicates.
+  pcl::console::setVerbosityLevel(pcl::console::L_ERROR);
   pcl::SACSegmentation<pcl::PointXYZ> sac(/*random=*/false);
   sac.setModelType(pcl::SACMODEL_PLANE);
   sac.setMethodType(pcl::SAC_RANSAC);
