@@ -50,6 +50,21 @@ PinholeCamera camera_from_argument(const std::string& camera) {
   return PinholeCamera::load(camera);
 }
 
+// Writes the folder with a progress line; Ctrl-C or SIGTERM removes the partial build (datasets/tum_writer.h).
+template <class Sequence>
+void write_folder(const Sequence& sequence, int frames, const GenerateArgs& a) {
+  datasets::TumWriteOptions write;
+  write.overwrite = a.force;
+  InterruptGuard guard;
+  Progress progress("generate", frames);
+  write.progress = [&](int done, int) {
+    progress.update(done);
+    guard.exit_if_interrupted("nothing written to " + a.out + " (the partial folder is removed)");
+  };
+  datasets::write_tum_folder(sequence, a.out, write);
+  progress.finish();
+}
+
 // The mesh, scaled to metres and centred at its vertices' centroid, seen from an orbit around it.
 void run_generate_mesh(const GenerateArgs& a) {
   TriangleMesh mesh = read_mesh_file(a.mesh);
@@ -78,16 +93,7 @@ void run_generate_mesh(const GenerateArgs& a) {
                         std::to_string(a.mesh_scale) + " m per unit)";
   seq.timestamp_s = datasets::mesh_orbit_timestamp_s;
   seq.frame = [&](int i) { return datasets::mesh_orbit_frame(mesh, orbit, i); };
-  datasets::TumWriteOptions write;
-  write.overwrite = a.force;
-  InterruptGuard guard;
-  Progress progress("generate", a.frames);
-  write.progress = [&](int done, int) {
-    progress.update(done);
-    guard.exit_if_interrupted("nothing written to " + a.out + " (the partial folder is removed)");
-  };
-  datasets::write_tum_folder(seq, a.out, write);
-  progress.finish();
+  write_folder(seq, a.frames, a);
   std::cout << "wrote " << a.frames << " frames of an orbit around " << a.mesh << " (seed " << a.seed << (a.no_noise ? ", no noise" : "")
             << ") to " << a.out << "\n";
 }
@@ -101,16 +107,7 @@ void run_generate(const GenerateArgs& a) {
   options.camera = camera_from_argument(a.camera);
   options.noise_enabled = !a.no_noise;
   const datasets::SyntheticSequence sequence(options);  // validates preset and frame count
-  datasets::TumWriteOptions write;
-  write.overwrite = a.force;
-  InterruptGuard guard;
-  Progress progress("generate", sequence.size());
-  write.progress = [&](int done, int) {
-    progress.update(done);
-    guard.exit_if_interrupted("nothing written to " + a.out + " (the partial folder is removed)");
-  };
-  datasets::write_tum_folder(sequence, a.out, write);
-  progress.finish();
+  write_folder(sequence, sequence.size(), a);
   std::cout << "wrote " << sequence.size() << " frames of synthetic '" << a.preset << "' (seed " << a.seed
             << (a.no_noise ? ", no noise" : "") << ") to " << a.out << "\n";
 }
