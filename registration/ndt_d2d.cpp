@@ -55,12 +55,8 @@ class NdtD2dRegistration final : public Registration {
                                  const SE3& T0) {
                                const NdtModel cur_model = build_ndt_model(cur, o.resolutions_m(), o.grid);
                                const NdtModel ref_model = build_ndt_model(ref, o.resolutions_m(), o.grid);
-                               NdtSolveOptions so;
-                               so.iterations = options_.driver.iterations;
-                               so.outlier_ratio = o.outlier_ratio;
-                               so.min_terms = kMinTerms;
-                               so.rows_possible = double(cur_model.levels.back().size());
-                               so.unit_scale = point_units(cur);
+                               const NdtSolveOptions so =
+                                   ndt_solve_options(options_, cur, double(cur_model.levels.back().size()), kMinTerms);
                                return solve_ndt(d2d_levels(cur_model, ref_model), so, options_.driver,
                                                 T0);
                              });

@@ -75,6 +75,17 @@ RegistrationResult ndt_align_checked(const FramePyramid& current, const FramePyr
   return r;
 }
 
+NdtSolveOptions ndt_solve_options(const RegistrationOptions& options, const std::vector<Eigen::Vector3d>& current,
+                                  double rows_possible, long min_terms) {
+  NdtSolveOptions so;
+  so.iterations = options.driver.iterations;
+  so.outlier_ratio = options.method_as<NdtOptions>().outlier_ratio;
+  so.min_terms = min_terms;
+  so.rows_possible = rows_possible;
+  so.unit_scale = point_units(current);
+  return so;
+}
+
 Vector6d point_units(const std::vector<Eigen::Vector3d>& points) {
   double sum_sq = 0.0;
   for (const Eigen::Vector3d& p : points) sum_sq += p.squaredNorm();

@@ -8,6 +8,7 @@
 
 #include "registration/frame_pyramid.h"
 #include "registration/ndt/ndt_cells.h"
+#include "registration/ndt/ndt_newton.h"
 #include "registration/registration.h"
 
 namespace hf {
@@ -36,6 +37,10 @@ using NdtAlign = std::function<RegistrationResult(const std::vector<Eigen::Vecto
                                                   const SE3& T_initial)>;
 RegistrationResult ndt_align_checked(const FramePyramid& current, const FramePyramid& reference,
                                      const SE3& T_initial, const RegistrationOptions& options, const NdtAlign& align);
+// The solver's settings for one alignment: the driver's iterations, the method's outlier ratio, the current
+// points' balanced units, and the terms the finest level could give (rows_possible) and needs (min_terms).
+NdtSolveOptions ndt_solve_options(const RegistrationOptions& options, const std::vector<Eigen::Vector3d>& current,
+                                  double rows_possible, long min_terms);
 // balanced_units() of a point set: S = diag(1/L x3, 1 x3), L the RMS distance of the points (>= 1 mm).
 Vector6d point_units(const std::vector<Eigen::Vector3d>& points);
 
