@@ -63,7 +63,8 @@ void record(const RecordOptions& o) {
 void add_record_command(CLI::App& app) {
   auto opts = std::make_shared<RecordOptions>();
   CLI::App* cmd = app.add_subcommand("record", "Record a live input as a TUM RGB-D folder that `run` replays");
-  cmd->add_option("--input", opts->input, "openni2://[URI], FILE.oni, v4l2:///dev/videoN[+/dev/videoM], libcamera://[ID]")
+  cmd->add_option("--input", opts->input,
+                  "openni2://[URI], FILE.oni, v4l2:///dev/videoN[+/dev/videoM], libcamera://[ID]")
       ->required();
   cmd->add_option("--out", opts->out, "the folder to create (must not exist)")->required();
   auto* frames = cmd->add_option("--frames", opts->frames, "stop after N frames")->check(CLI::PositiveNumber);

@@ -193,7 +193,9 @@ void run(const RunOptions& o, const CLI::App& cmd) {
     if (!o.screenshot.empty()) std::cout << "screenshot: " << std::filesystem::absolute(o.screenshot).string() << "\n";
   }
 #endif
-  const std::string done = "outputs written for " + std::to_string(summary.frames) + (source->size() == kUnknownFrameCount ? std::string(" frames (live)") : " of " + frames_text(*source));
+  const bool live = source->size() == kUnknownFrameCount;
+  const std::string done = "outputs written for " + std::to_string(summary.frames) +
+                           (live ? std::string(" frames (live)") : " of " + frames_text(*source));
   guard.exit_if_interrupted(done);
   if (!result.stopped_by.empty())
     throw Error(o.input + ": " + done + "; stopped at " + result.stopped_by + " (now --capacity-blocks " +

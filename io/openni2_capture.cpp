@@ -224,7 +224,8 @@ class OpenNi2Capture : public CaptureDevice {
         if (frames_ && depth_read_ >= *frames_) r.status = CaptureStatus::end;
         return r;
       }
-      if (s != ni::STATUS_OK || ready < 0 || ready > 1) return failed("waiting for frames failed (" + extended_error() + ")");
+      if (s != ni::STATUS_OK || ready < 0 || ready > 1)
+        return failed("waiting for frames failed (" + extended_error() + ")");
       ni::VideoFrameRef frame;
       if (streams[ready]->readFrame(&frame) != ni::STATUS_OK || !frame.isValid())
         return failed("reading a frame failed (" + extended_error() + ")");

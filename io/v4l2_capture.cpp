@@ -206,7 +206,8 @@ class V4l2Node {
 
 class V4l2Capture : public CaptureDevice {
  public:
-  V4l2Capture(const std::vector<std::string>& paths, const LiveInputOptions& o) : options_(o), pairer_(o.max_pair_difference_s) {
+  V4l2Capture(const std::vector<std::string>& paths, const LiveInputOptions& o)
+      : options_(o), pairer_(o.max_pair_difference_s) {
     if (paths.empty() || paths.size() > 2)
       throw Error("v4l2://: expected one node or two joined by '+' (v4l2:///dev/video0+/dev/video2)");
     for (const auto& p : paths) nodes_.push_back(std::make_unique<V4l2Node>(p, o));

@@ -63,7 +63,8 @@ SequenceRun run_sequence(FrameSource& source, Pipeline& pipeline, const RunContr
   const long total = control.max_frames > 0 ? std::min(control.max_frames, available) : available;
   std::unique_ptr<Progress> progress;
   if (!control.progress_label.empty())
-    progress = std::make_unique<Progress>(control.progress_label, total == std::numeric_limits<long>::max() ? 0 : total);
+    progress = std::make_unique<Progress>(control.progress_label,
+                                          total == std::numeric_limits<long>::max() ? 0 : total);
   const auto start = std::chrono::steady_clock::now();
   long read = 0;
   double busy_ms = 0.0;

@@ -40,7 +40,9 @@ void ViewController::drag(double dx, double dy) {
   follow_ = false;
 }
 
-void ViewController::scroll(double notches) { distance_m_ = std::clamp(distance_m_ * std::pow(0.9, notches), 0.1, 100.0); }
+void ViewController::scroll(double notches) {
+  distance_m_ = std::clamp(distance_m_ * std::pow(0.9, notches), 0.1, 100.0);
+}
 
 void ViewController::reset(const SE3& T_world_camera) {
   target_ = T_world_camera * Eigen::Vector3d(0, 0, 1.5);
@@ -52,7 +54,8 @@ void ViewController::reset(const SE3& T_world_camera) {
 
 SE3 ViewController::T_world_view() const {
   // Direction from the target back to the eye, in a y-down world (the first camera's frame).
-  const Eigen::Vector3d forward(std::sin(yaw_) * std::cos(pitch_), -std::sin(pitch_), std::cos(yaw_) * std::cos(pitch_));
+  const Eigen::Vector3d forward(std::sin(yaw_) * std::cos(pitch_), -std::sin(pitch_),
+                                std::cos(yaw_) * std::cos(pitch_));
   const Eigen::Vector3d eye = target_ - distance_m_ * forward;
   const Eigen::Vector3d z = forward.normalized();
   Eigen::Vector3d x = Eigen::Vector3d(0, 1, 0).cross(z);  // y down: right = down x forward

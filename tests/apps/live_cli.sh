@@ -3,6 +3,8 @@
 # without any device: OpenNI2's own Dummy driver (openni2://Dummy, 320x240 at 30 Hz) stands in for a sensor.
 #   bash live_cli.sh HASHFUSION SCRATCH_DIR CASE      (exit 77 = skipped, with the reason on stderr)
 set -u
+# Under the ASan preset LeakSanitizer lists the suppressions it used on stderr; the one-line checks count ours only.
+export LSAN_OPTIONS="${LSAN_OPTIONS:+$LSAN_OPTIONS:}print_suppressions=0"
 HF=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
 CASE=$3
 ROOT=$2/live_cli_$CASE

@@ -78,7 +78,8 @@ TEST(V4l2Capture, RealNodeStreams) {
 
 TEST(LibcameraCapture, AbsentCameraIsNamed) {
 #if HF_HAVE_LIBCAMERA
-  EXPECT_NE(open_error("libcamera://no-such-camera").find("libcamera://no-such-camera: no such camera; libcamera sees: "),
+  EXPECT_NE(open_error("libcamera://no-such-camera")
+                .find("libcamera://no-such-camera: no such camera; libcamera sees: "),
             std::string::npos);
 #else
   EXPECT_NE(open_error("libcamera://x").find("not built in"), std::string::npos);
