@@ -43,32 +43,17 @@ std::vector<NdtLevel> d2d_levels(const NdtModel& current, const NdtModel& refere
   return levels;
 }
 
-class NdtD2dRegistration final : public Registration {
- public:
-  explicit NdtD2dRegistration(const RegistrationOptions& options) : options_(options) { options_.validate(); }
+// Cell pairs at the finest level below which the estimate is failed: a 0.1 m model of a room view has ~500 cells.
+constexpr long kMinTerms = 20;
 
-  RegistrationResult align(const FramePyramid& current, const FramePyramid& reference,
-                           const SE3& T_ref_cur_initial) override {
-    const NdtOptions& o = options_.method_as<NdtOptions>();
-    return ndt_align_checked(current, reference, T_ref_cur_initial, options_,
-                             [&](const std::vector<Eigen::Vector3d>& cur, const std::vector<Eigen::Vector3d>& ref,
-                                 const SE3& T0) {
-                               const NdtModel cur_model = build_ndt_model(cur, o.resolutions_m(), o.grid);
-                               const NdtModel ref_model = build_ndt_model(ref, o.resolutions_m(), o.grid);
-                               const NdtSolveOptions so =
-                                   ndt_solve_options(options_, cur, double(cur_model.levels.back().size()), kMinTerms);
-                               return solve_ndt(d2d_levels(cur_model, ref_model), so, options_.driver,
-                                                T0);
-                             });
-  }
-  std::string name() const override { return "ndt-d2d"; }
-  const RegistrationOptions& options() const override { return options_; }
-
- private:
-  // Cell pairs at the finest level below which the estimate is failed: a 0.1 m model of a room view has ~500 cells.
-  static constexpr long kMinTerms = 20;
-  RegistrationOptions options_;
-};
+RegistrationResult solve(const RegistrationOptions& options, const std::vector<Eigen::Vector3d>& cur,
+                         const std::vector<Eigen::Vector3d>& ref, const SE3& T0) {
+  const NdtOptions& o = options.method_as<NdtOptions>();
+  const NdtModel cur_model = build_ndt_model(cur, o.resolutions_m(), o.grid);
+  const NdtModel ref_model = build_ndt_model(ref, o.resolutions_m(), o.grid);
+  const NdtSolveOptions so = ndt_solve_options(options, cur, double(cur_model.levels.back().size()), kMinTerms);
+  return solve_ndt(d2d_levels(cur_model, ref_model), so, options.driver, T0);
+}
 
 RegistrationOptions defaults() {
   GaussNewtonOptions driver;
@@ -81,7 +66,7 @@ RegistrationOptions defaults() {
 }
 
 std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
-  return std::make_unique<NdtD2dRegistration>(options);
+  return make_ndt_registration("ndt-d2d", options, solve);
 }
 
 }  // namespace

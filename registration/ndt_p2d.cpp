@@ -30,29 +30,13 @@ std::vector<NdtLevel> p2d_levels(const std::vector<Eigen::Vector3d>& points, con
   return levels;
 }
 
-class NdtP2dRegistration final : public Registration {
- public:
-  explicit NdtP2dRegistration(const RegistrationOptions& options) : options_(options) { options_.validate(); }
-
-  RegistrationResult align(const FramePyramid& current, const FramePyramid& reference,
-                           const SE3& T_ref_cur_initial) override {
-    const NdtOptions& o = options_.method_as<NdtOptions>();
-    return ndt_align_checked(current, reference, T_ref_cur_initial, options_,
-                             [&](const std::vector<Eigen::Vector3d>& cur, const std::vector<Eigen::Vector3d>& ref,
-                                 const SE3& T0) {
-                               const NdtModel model = build_ndt_model(ref, o.resolutions_m(), o.grid);
-                               const NdtSolveOptions so =
-                                   ndt_solve_options(options_, cur, double(cur.size()), options_.driver.min_inliers);
-                               return solve_ndt(p2d_levels(cur, model, o.neighbours), so, options_.driver,
-                                                T0);
-                             });
-  }
-  std::string name() const override { return "ndt-p2d"; }
-  const RegistrationOptions& options() const override { return options_; }
-
- private:
-  RegistrationOptions options_;
-};
+RegistrationResult solve(const RegistrationOptions& options, const std::vector<Eigen::Vector3d>& cur,
+                         const std::vector<Eigen::Vector3d>& ref, const SE3& T0) {
+  const NdtOptions& o = options.method_as<NdtOptions>();
+  const NdtModel model = build_ndt_model(ref, o.resolutions_m(), o.grid);
+  const NdtSolveOptions so = ndt_solve_options(options, cur, double(cur.size()), options.driver.min_inliers);
+  return solve_ndt(p2d_levels(cur, model, o.neighbours), so, options.driver, T0);
+}
 
 RegistrationOptions defaults() {
   GaussNewtonOptions driver;
@@ -64,7 +48,7 @@ RegistrationOptions defaults() {
 }
 
 std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
-  return std::make_unique<NdtP2dRegistration>(options);
+  return make_ndt_registration("ndt-p2d", options, solve);
 }
 
 }  // namespace

@@ -75,6 +75,36 @@ RegistrationResult ndt_align_checked(const FramePyramid& current, const FramePyr
   return r;
 }
 
+namespace {
+
+class NdtRegistration final : public Registration {
+ public:
+  NdtRegistration(std::string name, const RegistrationOptions& options, NdtSolve solve)
+      : name_(std::move(name)), options_(options), solve_(solve) {
+    options_.validate();
+  }
+  RegistrationResult align(const FramePyramid& current, const FramePyramid& reference,
+                           const SE3& T_ref_cur_initial) override {
+    return ndt_align_checked(current, reference, T_ref_cur_initial, options_,
+                             [&](const std::vector<Eigen::Vector3d>& cur, const std::vector<Eigen::Vector3d>& ref,
+                                 const SE3& T0) { return solve_(options_, cur, ref, T0); });
+  }
+  std::string name() const override { return name_; }
+  const RegistrationOptions& options() const override { return options_; }
+
+ private:
+  std::string name_;
+  RegistrationOptions options_;
+  NdtSolve solve_;
+};
+
+}  // namespace
+
+std::unique_ptr<Registration> make_ndt_registration(const std::string& name, const RegistrationOptions& options,
+                                                    NdtSolve solve) {
+  return std::make_unique<NdtRegistration>(name, options, solve);
+}
+
 NdtSolveOptions ndt_solve_options(const RegistrationOptions& options, const std::vector<Eigen::Vector3d>& current,
                                   double rows_possible, long min_terms) {
   NdtSolveOptions so;

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <functional>
+#include <memory>
+#include <string>
 #include <optional>
 #include <vector>
 
@@ -41,6 +43,13 @@ RegistrationResult ndt_align_checked(const FramePyramid& current, const FramePyr
 // points' balanced units, and the terms the finest level could give (rows_possible) and needs (min_terms).
 NdtSolveOptions ndt_solve_options(const RegistrationOptions& options, const std::vector<Eigen::Vector3d>& current,
                                   double rows_possible, long min_terms);
+// The Registration of an NDT method: its registry name, its options and how one alignment runs on the sampled
+// points (solve), wrapped in ndt_align_checked. Validates the options (hf::Error).
+using NdtSolve = RegistrationResult (*)(const RegistrationOptions& options, const std::vector<Eigen::Vector3d>& current,
+                                        const std::vector<Eigen::Vector3d>& reference, const SE3& T_initial);
+std::unique_ptr<Registration> make_ndt_registration(const std::string& name, const RegistrationOptions& options,
+                                                    NdtSolve solve);
+
 // balanced_units() of a point set: S = diag(1/L x3, 1 x3), L the RMS distance of the points (>= 1 mm).
 Vector6d point_units(const std::vector<Eigen::Vector3d>& points);
 
