@@ -193,4 +193,7 @@ PYBIND11_MODULE(_hashfusion, m) {
   bind_mesh(m);
   bind_trajectory(m);
   bind_slam(m);
+  bind_head(m);
+  bind_lidar(m);
+  bind_photogrammetry(m);
 }
