@@ -414,12 +414,9 @@ void Pipeline::close_loops(const RgbdFrame& frame, FrameResult* r) {
     const ColorImage cc = keyframes_.colour(c);
     const FramePyramid cp = build_frame_pyramid(cd, cc.empty() ? nullptr : &cc, camera_, po);
     const SE3 guess = keyframes_[c].T_world_camera.inverse() * keyframes_[k].T_world_camera;
-    const RegistrationResult reg = verifier.align(kp, cp, guess);
-    if (reg.status != RegistrationStatus::good || reg.inlier_ratio < lo.min_inlier_ratio) continue;
-    const Consistency cons = depth_consistency(kp.levels[0].vertices, depth_of(cp.levels[0].vertices),
-                                               tracking_camera_, reg.T_ref_cur, config_.volume.voxel_m);
-    if (cons.overlap == 0 || double(cons.consistent) < lo.min_consistent * double(cons.overlap)) continue;
-    loops_.push_back({c, k, reg.T_ref_cur, reg.information});
+    const std::optional<RegistrationResult> reg = register_keyframes(verifier, kp, cp, guess);
+    if (!reg) continue;
+    loops_.push_back({c, k, reg->T_ref_cur, reg->information});
     ++added;
   }
   keyframe_pyramid_ = std::move(kp);
@@ -450,15 +447,23 @@ void Pipeline::close_loops(const RgbdFrame& frame, FrameResult* r) {
 void Pipeline::measure_odometry_edge(const FramePyramid& keyframe) {
   const size_t k = keyframes_.size() - 1;
   if (k == 0 || !keyframe_pyramid_ || keyframe_pyramid_->num_levels() == 0) return;
-  const RegistrationResult reg = registration_->align(keyframe, *keyframe_pyramid_, keyframes_[k].T_previous_this);
-  if (reg.status != RegistrationStatus::good || reg.degenerate_dims > 0 ||
-      reg.inlier_ratio < config_.loop_closure.min_inlier_ratio)
-    return;
-  const Consistency cons = depth_consistency(keyframe.levels[0].vertices, depth_of(keyframe_pyramid_->levels[0].vertices),
+  const std::optional<RegistrationResult> reg =
+      register_keyframes(*registration_, keyframe, *keyframe_pyramid_, keyframes_[k].T_previous_this);
+  if (!reg || reg->degenerate_dims > 0) return;
+  keyframes_.set_odometry(k, reg->T_ref_cur, reg->information);
+}
+
+// One keyframe pair registered and verified as loop closure verifies (loop_closure.min_inlier_ratio and
+// min_consistent): the result when the registration is good and the depths agree where they overlap.
+std::optional<RegistrationResult> Pipeline::register_keyframes(Registration& method, const FramePyramid& current,
+                                                               const FramePyramid& reference, const SE3& guess) const {
+  const LoopClosureOptions& lo = config_.loop_closure;
+  RegistrationResult reg = method.align(current, reference, guess);
+  if (reg.status != RegistrationStatus::good || reg.inlier_ratio < lo.min_inlier_ratio) return std::nullopt;
+  const Consistency cons = depth_consistency(current.levels[0].vertices, depth_of(reference.levels[0].vertices),
                                              tracking_camera_, reg.T_ref_cur, config_.volume.voxel_m);
-  if (cons.overlap == 0 || double(cons.consistent) < config_.loop_closure.min_consistent * double(cons.overlap))
-    return;
-  keyframes_.set_odometry(k, reg.T_ref_cur, reg.information);
+  if (cons.overlap == 0 || double(cons.consistent) < lo.min_consistent * double(cons.overlap)) return std::nullopt;
+  return reg;
 }
 
 // Solves the keyframe graph; on success every keyframe takes its solution. The newest `new_loops` loops are

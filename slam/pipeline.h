@@ -173,6 +173,8 @@ class Pipeline {
   void commit_pending_images();
   void close_loops(const RgbdFrame& frame, FrameResult* r);
   void measure_odometry_edge(const FramePyramid& keyframe);
+  std::optional<RegistrationResult> register_keyframes(Registration& method, const FramePyramid& current,
+                                                       const FramePyramid& reference, const SE3& guess) const;
   bool apply_graph(const PoseGraphOptions& options, size_t new_loops = 0);
   void reintegrate(FrameResult* r);
   void record_anchor(const FrameResult& r);
