@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "core/error.h"
+#include "registration/pixel_selection.h"
 
 namespace hf {
 namespace {
@@ -252,6 +253,14 @@ ResidualProblem GaussNewtonRegistration::level_problem(const FramePyramid& curre
   problem.camera = c.camera.kernel_intrinsics();
   set_pyramid_maps(*problem.kernel, c, r, problem);
   method_->begin_level(level, c, r, problem);
+  const PixelSelectionOptions& selection = options_.driver.row_selection;
+  if (selection.enabled() && level < selection.levels &&
+      (problem.kernel->inputs & HF_REG_IN_BIT(HF_REG_IN_CUR_VERTICES)) != 0) {
+    // Rows only at the selected pixels: their vertices alone stay valid, which every kernel and backend honours.
+    selected_vertices_ = c.vertices;
+    apply_pixel_selection(select_pixels(c, selection), &selected_vertices_);
+    problem.set_map(HF_REG_IN_CUR_VERTICES, selected_vertices_.data());
+  }
   problem.params = method_->params();
   problem.pixel_step = method_->pixel_step();
   problem.inputs_version = ++version_;
@@ -336,7 +345,20 @@ RegistrationResult GaussNewtonRegistration::align_impl(const FramePyramid& curre
   }
   const GaussNewtonStep final_step = solve_balanced_step(last, unit_scale, o.degeneracy_threshold);
   if (!final_step.finite) return fail(RegistrationStatus::failed, "non-finite normal equations");
-  classify_outcome(o, last, final_step, method_->rows_possible(current.levels[0]), T_initial, T, last_step, result);
+  // With a row selection on the finest level, the rows possible are those of its selected pixels (the level's
+  // problem, the last one made, left them in selected_vertices_).
+  double rows_possible = 0.0;
+  if (o.row_selection.enabled() && !selected_vertices_.empty() &&
+      selected_vertices_.size() == current.levels[0].vertices.size()) {
+    FramePyramidLevel selected;
+    selected.camera = current.levels[0].camera;
+    selected.vertices = std::move(selected_vertices_);
+    rows_possible = method_->rows_possible(selected);
+    selected_vertices_ = std::move(selected.vertices);
+  } else {
+    rows_possible = method_->rows_possible(current.levels[0]);
+  }
+  classify_outcome(o, last, final_step, rows_possible, T_initial, T, last_step, result);
   for (size_t t = 0; t < last_terms.size(); ++t) {
     result.terms.push_back({term_names[t], last_terms[t].JtJ, last_terms[t].count});
   }

@@ -89,6 +89,7 @@ class GaussNewtonRegistration : public Registration {
   RegistrationOptions options_;
   std::unique_ptr<ReductionBackend> backend_;
   std::uint64_t version_ = 0;
+  VertexMap selected_vertices_;  // the current level's vertices under GaussNewtonOptions::row_selection
 };
 
 }  // namespace hf

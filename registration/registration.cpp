@@ -92,6 +92,13 @@ void GaussNewtonOptions::visit(OptionVisitor& v) {
   v("verify_agreement_deg", verify_agreement_deg);
   v("max_final_step_translation_m", max_final_step_translation_m);
   v("max_final_step_rotation_rad", max_final_step_rotation_rad);
+  int mode = int(row_selection.mode);  // the visitor knows ints, not the enum
+  v("row_selection", mode);
+  row_selection.mode = PixelSelectionMode(mode);
+  v("row_selection_tile_px", row_selection.tile_px);
+  v("row_selection_budget", row_selection.budget_per_tile);
+  v("row_selection_depth_edge_weight", row_selection.depth_edge_weight);
+  v("row_selection_levels", row_selection.levels);
 }
 
 void GaussNewtonOptions::validate() const {
@@ -113,6 +120,7 @@ void GaussNewtonOptions::validate() const {
   check(finite_positive(max_rotation_deg), "max_rotation_deg must be finite and > 0");
   check(finite_positive(max_final_step_translation_m), "max_final_step_translation_m must be finite and > 0");
   check(finite_positive(max_final_step_rotation_rad), "max_final_step_rotation_rad must be finite and > 0");
+  row_selection.validate();
 }
 
 RegistrationOptions::RegistrationOptions(const GaussNewtonOptions& d, std::unique_ptr<MethodOptions> m)

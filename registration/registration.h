@@ -24,6 +24,7 @@
 
 #include "core/se3.h"
 #include "registration/frame_pyramid.h"
+#include "registration/pixel_selection.h"
 #include "registration/reduction.h"
 
 namespace hf {
@@ -121,6 +122,11 @@ struct GaussNewtonOptions {
   // real frames end near 1e-4 under changing IRLS weights).
   double max_final_step_translation_m = 2e-3;
   double max_final_step_rotation_rad = 2e-3;
+  // Which current pixels give rows on the finest row_selection.levels levels (registration/pixel_selection.h):
+  // all (the default), an importance-driven budget per tile, or the same budget spread uniformly. Keys
+  // row_selection (0 all, 1 importance, 2 uniform), row_selection_tile_px, row_selection_budget,
+  // row_selection_depth_edge_weight, row_selection_levels. Measured in bench/results/fewer_rays_tracking.md.
+  PixelSelectionOptions row_selection;
 
   void visit(OptionVisitor& v);
   void validate() const;  // hf::Error naming the first bad field
