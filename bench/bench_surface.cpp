@@ -135,16 +135,13 @@ void BM_RaycastFloor(benchmark::State& state) {
       p_vox[size_t(y) * W + x] =
           s.grid->voxel_coords(f.T_world_camera * Eigen::Vector3d(v.x, v.y, v.z)).cast<float>();
     }
-  std::vector<std::uint8_t> surface_free;
-  const auto blocks = blocks_in_view(*s.grid, s.seq->camera(), f.T_world_camera, opts, &surface_free);
-  const BlockLookup lookup(blocks, &surface_free);
   constexpr int kWork = 16;
   const int WX = (W + kWork - 1) / kWork, WY = (H + kWork - 1) / kWork;
   std::vector<int> tile_normals(size_t(WX) * WY);
   const double cpu0 = process_cpu_s();
   for (auto _ : state) {
     tbb::parallel_for(tbb::blocked_range<int>(0, WX * WY), [&](const tbb::blocked_range<int>& work) {
-      VolumeSampler sampler(lookup, opts.min_weight);
+      VolumeSampler sampler(*s.grid, opts.min_weight, opts.skip_blocks);
       for (int wi = work.begin(); wi != work.end(); ++wi) {
         const int x0 = (wi % WX) * kWork, y0 = (wi / WX) * kWork;
         int n_ok = 0;

@@ -24,66 +24,33 @@ namespace hf::fusion {
 // ---------------------------------------------------------------------------------------------------------------
 // BlockLookup
 
-BlockLookup::BlockLookup(const VoxelBlockGrid& grid) {
-  std::vector<std::uint8_t> surface_free;
-  const auto blocks = grid.blocks_unordered(&surface_free);
-  *this = BlockLookup(blocks, &surface_free);
-}
-
 BlockLookup::BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBlock*>>& blocks,
-                         const std::vector<std::uint8_t>* surface_free) {
+                         const std::vector<std::uint8_t>* surface_free)
+    : table_(blocks.size()), regions_(blocks.size()) {
   if (surface_free != nullptr && surface_free->size() != blocks.size())
     throw Error("BlockLookup: " + std::to_string(surface_free->size()) + " surface_free flags for " +
                 std::to_string(blocks.size()) + " blocks");
-  size_ = blocks.size();
-  // Load factor <= 0.5 keeps linear probes short.
-  const size_t n = std::bit_ceil(std::max<size_t>(16, 2 * blocks.size()));
-  slots_.assign(n, Slot{});
-  mask_ = n - 1;
-  shift_ = 64 - std::countr_zero(n);
+  blocks_.reserve(blocks.size());
+  skippable_.reserve(blocks.size());
+  constexpr int R = VoxelBlockGrid::kRegionShift;
   for (size_t b = 0; b < blocks.size(); ++b) {
     const auto& [c, block] = blocks[b];
     if (block == nullptr) throw Error("BlockLookup: null block pointer");
-    size_t i = slot_of(c.x, c.y, c.z);
-    while (slots_[i].block != nullptr && !(slots_[i].x == c.x && slots_[i].y == c.y && slots_[i].z == c.z))
-      i = (i + 1) & mask_;
-    if (slots_[i].block != nullptr) {
-      --size_;  // the same coordinate twice: the first one wins
-      continue;
-    }
-    slots_[i] = Slot{c.x, c.y, c.z, surface_free != nullptr && (*surface_free)[b] != 0, block};
-  }
-  // Regions: at most as many as blocks, usually far fewer; a table 2^extra times smaller than slots_ takes the
-  // same hash's top bits. The distinct regions are found by inserting every block's region into a scratch table
-  // as large as slots_ (no sort: sorting the blocks' regions took ~1.3 % of the SLAM pipeline's time), then moved
-  // into a table sized for them.
-  std::vector<Slot> scratch(n);
-  size_t distinct = 0;
-  for (const Slot& s : slots_) {
-    if (s.block == nullptr) continue;
-    const Slot r{s.x >> kRegionShift, s.y >> kRegionShift, s.z >> kRegionShift, false, s.block};
-    size_t i = slot_of(r.x, r.y, r.z);
-    while (scratch[i].block != nullptr && !(scratch[i].x == r.x && scratch[i].y == r.y && scratch[i].z == r.z))
-      i = (i + 1) & mask_;
-    if (scratch[i].block == nullptr) {
-      scratch[i] = r;
-      ++distinct;
-    }
-  }
-  const size_t nr = std::bit_ceil(std::max<size_t>(16, 2 * distinct));
-  region_extra_shift_ = std::countr_zero(n) - std::countr_zero(nr);
-  regions_.assign(nr, Slot{});
-  region_mask_ = nr - 1;
-  for (const Slot& r : scratch) {
-    if (r.block == nullptr) continue;
-    size_t i = slot_of(r.x, r.y, r.z) >> region_extra_shift_;
-    while (regions_[i].block != nullptr) i = (i + 1) & region_mask_;
-    regions_[i] = r;
+    if (table_.find(c.x, c.y, c.z) != 0) continue;  // the same coordinate twice: the first one wins
+    blocks_.push_back(block);
+    skippable_.push_back(surface_free != nullptr && (*surface_free)[b] != 0);
+    table_.insert(c.x, c.y, c.z, std::uint32_t(blocks_.size()));
+    if (regions_.find(c.x >> R, c.y >> R, c.z >> R) == 0) regions_.insert(c.x >> R, c.y >> R, c.z >> R, 1);
   }
 }
 
 // ---------------------------------------------------------------------------------------------------------------
 // VolumeSampler
+
+VolumeSampler::VolumeSampler(const VoxelBlockGrid& grid, float min_weight, bool skip_surface_free)
+    : grid_(&grid),
+      skip_surface_free_(skip_surface_free),
+      min_weight_raw_(std::max<std::uint16_t>(1, hf_quantise_weight(std::max(0.0f, min_weight)))) {}
 
 VolumeSampler::VolumeSampler(const BlockLookup& lookup, float min_weight)
     : lookup_(&lookup),
@@ -595,7 +562,7 @@ bool march(VolumeSampler& sampler, const MarchParams& m, const Eigen::Vector3f& 
     const VoxelBlock* block = sampler.block(i >> 3, j >> 3, k >> 3, &skippable);
     if (block == nullptr) {
       // Jump to where the ray leaves this block, or its whole region when that holds no block at all.
-      constexpr int kRegionShift = BlockLookup::kRegionShift + 3;  // region size in voxels, log2
+      constexpr int kRegionShift = VoxelBlockGrid::kRegionShift + 3;  // region size in voxels, log2
       const bool region_empty = !sampler.region_occupied(i >> kRegionShift, j >> kRegionShift, k >> kRegionShift);
       t = std::max(exit_of(i, j, k, region_empty ? kRegionShift : 3), t) + skip_eps;
       have_prev = false;
@@ -775,12 +742,10 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
   else
     out->shaded = ColorImage();
 
-  // The blocks the rays can read, for the look-up table and the range image (neither depends on their order): the
-  // map outgrows the view on every real sequence, and both cost per block.
-  std::vector<std::uint8_t> surface_free;
-  const auto blocks =
-      blocks_in_view(grid, camera, T_world_camera, options, options.skip_blocks ? &surface_free : nullptr);
-  const BlockLookup lookup(blocks, options.skip_blocks ? &surface_free : nullptr);
+  // The blocks the rays can read, for the range image (which does not depend on their order): the map outgrows
+  // the view on every real sequence. The rays look blocks up in the grid itself (VoxelBlockGrid::find is
+  // lock-free).
+  const auto blocks = blocks_in_view(grid, camera, T_world_camera, options);
   const double voxel_m = grid.params().voxel_m;
   const float mu_m = float(grid.params().truncation_m());
   const Eigen::Matrix3f R = T_world_camera.rotation().cast<float>();
@@ -925,7 +890,7 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
   const int WX = (W + kWork - 1) / kWork, WY = (H + kWork - 1) / kWork;
   std::vector<int> tile_hits(size_t(WX) * WY, 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, WX * WY), [&](const tbb::blocked_range<int>& work) {
-    VolumeSampler sampler(lookup, options.min_weight);
+    VolumeSampler sampler(grid, options.min_weight, options.skip_blocks);
     for (int wi = work.begin(); wi != work.end(); ++wi) {
       const int x0 = (wi % WX) * kWork, y0 = (wi / WX) * kWork;
       const int x1 = std::min(x0 + kWork, W), y1 = std::min(y0 + kWork, H);

@@ -39,91 +39,55 @@
 #include "core/camera.h"
 #include "core/image.h"
 #include "core/se3.h"
+#include "fusion/block_hash_table.h"
 #include "fusion/voxel_block_grid.h"
 
 namespace hf::fusion {
 
-// A read-only snapshot of block pointers with lock-free lookups (open addressing), for passes that look blocks up
-// millions of times (raycasting, meshing) where the grid's own find() would take its lock each time. Valid while
-// the blocks it was built from are neither released nor moved.
+// A look-up table over a list of blocks that is not a grid (meshing a given set of blocks, e.g. one read back
+// from a stream): the same hash table as VoxelBlockGrid (fusion/block_hash_table.h) and the same questions
+// (find, region_occupied). Valid while the blocks it was built from are neither released nor moved. A grid needs
+// none of this: VoxelBlockGrid::find is lock-free, and a VolumeSampler reads it directly.
 class BlockLookup {
  public:
   BlockLookup() = default;
-  // Every block of the grid, with its surface_free flag (VoxelBlockGrid::surface_free) as find()'s skippable.
-  explicit BlockLookup(const VoxelBlockGrid& grid);
-  // surface_free: one flag per block (same order), or nullptr (no block is skippable).
+  // surface_free: one flag per block (same order), or nullptr (no block is skippable). A coordinate listed twice
+  // keeps its first block.
   explicit BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBlock*>>& blocks,
                        const std::vector<std::uint8_t>* surface_free = nullptr);
 
   const VoxelBlock* find(int bx, int by, int bz) const {
-    const Slot* s = probe(bx, by, bz);
-    return s != nullptr ? s->block : nullptr;
+    const std::uint32_t v = table_.find(bx, by, bz);
+    return v != 0 ? blocks_[v - 1] : nullptr;
   }
   // Also whether a raycast may skip the block (its surface_free flag; false for a missing block).
   const VoxelBlock* find(int bx, int by, int bz, bool* skippable) const {
-    const Slot* s = probe(bx, by, bz);
-    *skippable = s != nullptr && s->skippable;
-    return s != nullptr ? s->block : nullptr;
+    const std::uint32_t v = table_.find(bx, by, bz);
+    *skippable = v != 0 && skippable_[v - 1] != 0;
+    return v != 0 ? blocks_[v - 1] : nullptr;
   }
-  size_t size() const { return size_; }
-
-  // Coarse occupancy for skipping empty space: a region is kRegionBlocks^3 blocks (region r holds blocks
-  // [4 r, 4 r + 4) on each axis); true when any of its blocks exists.
-  static constexpr int kRegionShift = 2;
-  static constexpr int kRegionBlocks = 1 << kRegionShift;
-  bool region_occupied(int rx, int ry, int rz) const {
-    if (regions_.empty()) return false;
-    size_t i = slot_of(rx, ry, rz) >> region_extra_shift_;
-    for (;;) {
-      const Slot& s = regions_[i];
-      if (s.block == nullptr) return false;
-      if (s.x == rx && s.y == ry && s.z == rz) return true;
-      i = (i + 1) & region_mask_;
-    }
-  }
+  size_t size() const { return table_.size(); }
+  // VoxelBlockGrid::region_occupied for the listed blocks.
+  bool region_occupied(int rx, int ry, int rz) const { return regions_.find(rx, ry, rz) != 0; }
 
  private:
-  // Niessner's hash spreads neighbouring blocks poorly over the low bits a power-of-two table uses (long probe
-  // runs for the misses a raycast mostly asks about); a Fibonacci multiply takes the well-mixed high bits instead.
-  size_t slot_of(int bx, int by, int bz) const {
-    const std::uint64_t k = (std::uint64_t(std::uint32_t(bx)) * 0x9E3779B97F4A7C15ull) ^
-                            (std::uint64_t(std::uint32_t(by)) * 0xC2B2AE3D27D4EB4Full) ^
-                            (std::uint64_t(std::uint32_t(bz)) * 0x165667B19E3779F9ull);
-    return size_t((k * 0x9E3779B97F4A7C15ull) >> shift_);
-  }
-  struct Slot {
-    int x = 0, y = 0, z = 0;
-    bool skippable = false;  // in what was padding
-    const VoxelBlock* block = nullptr;
-  };
-  // The slot holding (bx, by, bz), or nullptr.
-  const Slot* probe(int bx, int by, int bz) const {
-    if (slots_.empty()) return nullptr;
-    size_t i = slot_of(bx, by, bz);
-    for (;;) {
-      const Slot& s = slots_[i];
-      if (s.block == nullptr) return nullptr;
-      if (s.x == bx && s.y == by && s.z == bz) return &s;
-      i = (i + 1) & mask_;
-    }
-  }
-  std::vector<Slot> slots_;
-  std::vector<Slot> regions_;  // Slot::block is any block of the region (only tested for nullptr)
-  size_t region_mask_ = 0;
-  int region_extra_shift_ = 0;  // regions_ is smaller than slots_ by this many bits
-  size_t mask_ = 0;
-  int shift_ = 63;  // 64 - log2(table size)
-  size_t size_ = 0;
+  BlockHashTable table_;    // coordinate -> index into blocks_ + 1
+  BlockHashTable regions_;  // region -> 1
+  std::vector<const VoxelBlock*> blocks_;
+  std::vector<std::uint8_t> skippable_;
 };
 
 // Voxel access and trilinear sampling in continuous voxel coordinates (voxel centres at integers, see
 // VoxelBlockGrid::voxel_coords). Caches the last blocks, so neighbouring samples cost no hash lookup, and the last
 // trilinear cell's eight values, so samples in the same cell (a march's short steps near the surface, the
 // refinement of a crossing) cost no gather. One sampler per thread (not thread-safe itself); many samplers may
-// share one BlockLookup. The caches only save work: every result equals the uncached computation bit for bit.
+// share one grid or BlockLookup. The caches only save work: every result equals the uncached computation bit for bit.
 class VolumeSampler {
  public:
-  // Voxels with weight < min_weight count as unobserved, as do never-observed voxels (weight 0) always.
+  // Voxels with weight < min_weight count as unobserved, as do never-observed voxels (weight 0) always. On a
+  // grid, skippable blocks are its surface_free() ones when skip_surface_free (else none); the grid must not be
+  // changed while the sampler reads it except by allocate().
+  VolumeSampler(const VoxelBlockGrid& grid, float min_weight, bool skip_surface_free = true);
   VolumeSampler(const BlockLookup& lookup, float min_weight);
 
   // The voxel at world-grid index (i, j, k), or nullptr when its block does not exist.
@@ -142,16 +106,21 @@ class VolumeSampler {
   const VoxelBlock* block(int bx, int by, int bz, bool* skippable) {
     CacheEntry& e = cache_[(bx & 1) | ((by & 1) << 1) | ((bz & 1) << 2)];
     if (bx != e.x || by != e.y || bz != e.z) {
-      e.block = lookup_->find(bx, by, bz, &e.skippable);
+      if (grid_ != nullptr) {
+        e.block = grid_->find(BlockCoord{bx, by, bz}, &e.skippable);
+        e.skippable = e.skippable && skip_surface_free_;
+      } else {
+        e.block = lookup_->find(bx, by, bz, &e.skippable);
+      }
       e.x = bx, e.y = by, e.z = bz;
     }
     *skippable = e.skippable;
     return e.block;
   }
-  // BlockLookup::region_occupied with the last region cached.
+  // VoxelBlockGrid::region_occupied with the last region cached.
   bool region_occupied(int rx, int ry, int rz) {
     if (rx != rx_ || ry != ry_ || rz != rz_) {
-      region_ = lookup_->region_occupied(rx, ry, rz);
+      region_ = grid_ != nullptr ? grid_->region_occupied(rx, ry, rz) : lookup_->region_occupied(rx, ry, rz);
       rx_ = rx, ry_ = ry, rz_ = rz;
     }
     return region_;
@@ -189,7 +158,9 @@ class VolumeSampler {
   template <int N>
   bool row(int i, int j, int k, float* out);
 
-  const BlockLookup* lookup_;
+  const VoxelBlockGrid* grid_ = nullptr;  // one of these two
+  const BlockLookup* lookup_ = nullptr;
+  bool skip_surface_free_ = false;
   std::uint16_t min_weight_raw_;  // >= 1: weight 0 (never observed) is always unobserved
   struct CacheEntry {
     int x = -2147483647 - 1, y = 0, z = 0;  // nothing cached yet (block x never reaches INT_MIN)
@@ -264,9 +235,9 @@ constexpr double kRaycastReachVox = 3.5;
 
 // The blocks a raycast() from T_world_camera with these options may read, in the grid's hash order: every block
 // whose bounding sphere comes within kRaycastReachVox voxels of the view frustum between min_depth_m and
-// max_depth_m (its sides one pixel outside the image). raycast() builds its look-up table and range image from
-// these only, so per frame it costs one sphere test per block of the map and otherwise scales with the view, not
-// the map. With surface_free, also their VoxelBlockGrid::surface_free flags (same order).
+// max_depth_m (its sides one pixel outside the image). raycast() builds its range image from these only, so per
+// frame it costs one sphere test per block of the map and otherwise scales with the view, not the map. With
+// surface_free, also their VoxelBlockGrid::surface_free flags (same order).
 std::vector<std::pair<BlockCoord, const VoxelBlock*>> blocks_in_view(const VoxelBlockGrid& grid,
                                                                      const PinholeCamera& camera,
                                                                      const SE3& T_world_camera,

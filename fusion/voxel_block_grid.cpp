@@ -1,16 +1,17 @@
 #include "fusion/voxel_block_grid.h"
 
 #include <algorithm>
+#include <climits>
 #include <cstddef>
 #include <cmath>
 #include <mutex>
-#include <shared_mutex>
 #include <sstream>
-#include <unordered_map>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+
+#include "fusion/block_hash_table.h"
 
 namespace hf::fusion {
 
@@ -41,20 +42,38 @@ void VolumeParams::validate() const {
 }
 
 // The pool is a fixed table of chunk pointers (sized from the capacity) so a slot's address never moves and
-// readers need no lock to turn a slot into a block pointer; chunks are allocated on first use.
+// readers need no lock to turn a slot into a block pointer; chunks are allocated on first use. The block table maps
+// a coordinate to slot + 1; the region table maps a region (VoxelBlockGrid::kRegionShift) to its number of blocks.
+// Both are BlockHashTables: readers never lock; writers (allocate) serialise on create_mutex.
 struct VoxelBlockGrid::Impl {
   explicit Impl(size_t capacity)
-      : chunks((capacity + kChunkBlocks - 1) / kChunkBlocks), surface_free(chunks.size()) {}
+      : chunks((capacity + kChunkBlocks - 1) / kChunkBlocks),
+        surface_free(chunks.size()),
+        slot_coords(chunks.size()),
+        table(capacity),
+        regions(capacity) {}
 
   VoxelBlock* slot_block(std::uint32_t slot) const { return &chunks[slot / kChunkBlocks][slot % kChunkBlocks]; }
   std::uint8_t& slot_surface_free(std::uint32_t slot) const {
     return surface_free[slot / kChunkBlocks][slot % kChunkBlocks];
   }
+  BlockCoord& slot_coord(std::uint32_t slot) const { return slot_coords[slot / kChunkBlocks][slot % kChunkBlocks]; }
+  // The slot of block c, or UINT32_MAX. Lock-free.
+  std::uint32_t slot_of(const BlockCoord& c) const { return table.find(c.x, c.y, c.z) - 1u; }
+  // f(slot) for every allocated block in slot order (create_mutex held by the caller).
+  template <class F>
+  void for_each_slot(F&& f) const {
+    for (std::uint32_t s = 0; s < next_slot; ++s)
+      if (slot_live(s)) f(s);
+  }
+  bool slot_live(std::uint32_t s) const { return slot_of(slot_coord(s)) == s; }
 
-  mutable std::shared_mutex mutex;
-  std::unordered_map<BlockCoord, std::uint32_t, BlockCoordHash> table;
+  std::mutex create_mutex;  // serialises allocate()'s writers; taken by the whole-grid listings too
   std::vector<std::unique_ptr<VoxelBlock[]>> chunks;
   std::vector<std::unique_ptr<std::uint8_t[]>> surface_free;  // per slot, beside chunks (see surface_free())
+  std::vector<std::unique_ptr<BlockCoord[]>> slot_coords;     // per slot: the block it holds (when live)
+  BlockHashTable table;
+  BlockHashTable regions;
   std::vector<std::uint32_t> free_slots;
   std::uint32_t next_slot = 0;  // slots below this have been handed out at least once
 };
@@ -68,14 +87,25 @@ VoxelBlockGrid::VoxelBlockGrid(VoxelBlockGrid&&) noexcept = default;
 VoxelBlockGrid& VoxelBlockGrid::operator=(VoxelBlockGrid&&) noexcept = default;
 
 VoxelBlock* VoxelBlockGrid::find(const BlockCoord& c) {
-  std::shared_lock lock(impl_->mutex);
-  auto it = impl_->table.find(c);
-  return it == impl_->table.end() ? nullptr : impl_->slot_block(it->second);
+  const std::uint32_t slot = impl_->slot_of(c);
+  return slot == UINT32_MAX ? nullptr : impl_->slot_block(slot);
 }
 
 const VoxelBlock* VoxelBlockGrid::find(const BlockCoord& c) const {
   return const_cast<VoxelBlockGrid*>(this)->find(c);
 }
+
+const VoxelBlock* VoxelBlockGrid::find(const BlockCoord& c, bool* surface_free) const {
+  const std::uint32_t slot = impl_->slot_of(c);
+  if (slot == UINT32_MAX) {
+    *surface_free = false;
+    return nullptr;
+  }
+  *surface_free = impl_->slot_surface_free(slot) != 0;
+  return impl_->slot_block(slot);
+}
+
+bool VoxelBlockGrid::region_occupied(int rx, int ry, int rz) const { return impl_->regions.find(rx, ry, rz) != 0; }
 
 VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c, bool* created, std::uint8_t** surface_free) {
   if (created) *created = false;
@@ -83,24 +113,21 @@ VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c, bool* created, std::ui
     if (surface_free != nullptr) *surface_free = &impl_->slot_surface_free(slot);
     return impl_->slot_block(slot);
   };
-  {
-    std::shared_lock lock(impl_->mutex);
-    auto it = impl_->table.find(c);
-    if (it != impl_->table.end()) return found(it->second);
-  }
-  std::unique_lock lock(impl_->mutex);
-  auto it = impl_->table.find(c);  // another thread may have created it between the two locks
-  if (it != impl_->table.end()) return found(it->second);
+  if (const std::uint32_t slot = impl_->slot_of(c); slot != UINT32_MAX) return found(slot);
+  std::lock_guard lock(impl_->create_mutex);
+  // Another thread may have created it since the look-up above.
+  if (const std::uint32_t slot = impl_->slot_of(c); slot != UINT32_MAX) return found(slot);
   std::uint32_t slot;
   if (!impl_->free_slots.empty()) {
     slot = impl_->free_slots.back();
     impl_->free_slots.pop_back();
   } else if (impl_->next_slot < params_.capacity_blocks) {
     slot = impl_->next_slot++;
-    auto& chunk = impl_->chunks[slot / kChunkBlocks];
-    if (!chunk) {
-      chunk = std::make_unique<VoxelBlock[]>(kChunkBlocks);  // value-initialised: all voxels zero
-      impl_->surface_free[slot / kChunkBlocks] = std::make_unique<std::uint8_t[]>(kChunkBlocks);
+    const size_t chunk = slot / kChunkBlocks;
+    if (!impl_->chunks[chunk]) {
+      impl_->chunks[chunk] = std::make_unique<VoxelBlock[]>(kChunkBlocks);  // value-initialised: all voxels zero
+      impl_->surface_free[chunk] = std::make_unique<std::uint8_t[]>(kChunkBlocks);
+      impl_->slot_coords[chunk] = std::make_unique<BlockCoord[]>(kChunkBlocks);
     }
   } else {
     std::ostringstream msg;
@@ -113,46 +140,55 @@ VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c, bool* created, std::ui
   VoxelBlock* block = impl_->slot_block(slot);
   block->voxels.fill(Voxel{});
   impl_->slot_surface_free(slot) = 0;
-  impl_->table.emplace(c, slot);
+  impl_->slot_coord(slot) = c;
+  // The region first, then the block (published last, with its voxels cleared): a reader may see an occupied
+  // region whose block is not there yet, never a block of a region that reads empty.
+  const int rx = c.x >> kRegionShift, ry = c.y >> kRegionShift, rz = c.z >> kRegionShift;
+  if (const std::uint32_t n = impl_->regions.find(rx, ry, rz); n != 0)
+    impl_->regions.set_value(rx, ry, rz, n + 1);
+  else
+    impl_->regions.insert(rx, ry, rz, 1);  // cannot be full: regions <= blocks <= capacity
+  impl_->table.insert(c.x, c.y, c.z, slot + 1);
   if (created) *created = true;
   if (surface_free != nullptr) *surface_free = &impl_->slot_surface_free(slot);
   return block;
 }
 
 bool VoxelBlockGrid::release(const BlockCoord& c) {
-  std::unique_lock lock(impl_->mutex);
-  auto it = impl_->table.find(c);
-  if (it == impl_->table.end()) return false;
-  impl_->free_slots.push_back(it->second);
-  impl_->table.erase(it);
+  const std::uint32_t value = impl_->table.erase(c.x, c.y, c.z);
+  if (value == 0) return false;
+  impl_->free_slots.push_back(value - 1);
+  const int rx = c.x >> kRegionShift, ry = c.y >> kRegionShift, rz = c.z >> kRegionShift;
+  const std::uint32_t n = impl_->regions.find(rx, ry, rz);
+  if (n > 1)
+    impl_->regions.set_value(rx, ry, rz, n - 1);
+  else
+    impl_->regions.erase(rx, ry, rz);
   return true;
 }
 
 void VoxelBlockGrid::clear() {
-  std::unique_lock lock(impl_->mutex);
   impl_->table.clear();
+  impl_->regions.clear();
   impl_->free_slots.clear();
   impl_->next_slot = 0;
 }
 
-size_t VoxelBlockGrid::block_count() const {
-  std::shared_lock lock(impl_->mutex);
-  return impl_->table.size();
-}
+size_t VoxelBlockGrid::block_count() const { return impl_->table.size(); }
 
 size_t VoxelBlockGrid::memory_bytes() const {
-  std::shared_lock lock(impl_->mutex);
-  // A node of the hash holds the key, the slot and a next pointer (plus the cached hash in libstdc++).
-  const size_t node_bytes = sizeof(BlockCoord) + sizeof(std::uint32_t) + 2 * sizeof(void*);
-  return impl_->table.size() * (sizeof(VoxelBlock) + node_bytes) + impl_->table.bucket_count() * sizeof(void*);
+  // Blocks in use, their per-slot flag and coordinate, and the two hash tables (their whole arrays: calloc'd zero
+  // pages cost nothing until touched, so this is an upper bound).
+  return block_count() * (sizeof(VoxelBlock) + sizeof(std::uint8_t) + sizeof(BlockCoord)) + impl_->table.bytes() +
+         impl_->regions.bytes();
 }
 
 std::vector<BlockCoord> VoxelBlockGrid::block_coords() const {
   std::vector<BlockCoord> coords;
   {
-    std::shared_lock lock(impl_->mutex);
-    coords.reserve(impl_->table.size());
-    for (const auto& [c, slot] : impl_->table) coords.push_back(c);
+    std::lock_guard lock(impl_->create_mutex);
+    coords.reserve(block_count());
+    impl_->for_each_slot([&](std::uint32_t s) { coords.push_back(impl_->slot_coord(s)); });
   }
   std::sort(coords.begin(), coords.end(), coord_less);
   return coords;
@@ -161,9 +197,9 @@ std::vector<BlockCoord> VoxelBlockGrid::block_coords() const {
 std::vector<std::pair<BlockCoord, VoxelBlock*>> VoxelBlockGrid::blocks() {
   std::vector<std::pair<BlockCoord, VoxelBlock*>> out;
   {
-    std::shared_lock lock(impl_->mutex);
-    out.reserve(impl_->table.size());
-    for (const auto& [c, slot] : impl_->table) out.emplace_back(c, impl_->slot_block(slot));
+    std::lock_guard lock(impl_->create_mutex);
+    out.reserve(block_count());
+    impl_->for_each_slot([&](std::uint32_t s) { out.emplace_back(impl_->slot_coord(s), impl_->slot_block(s)); });
   }
   std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return coord_less(a.first, b.first); });
   return out;
@@ -177,29 +213,27 @@ std::vector<std::pair<BlockCoord, const VoxelBlock*>> VoxelBlockGrid::blocks() c
 std::vector<std::pair<BlockCoord, const VoxelBlock*>> VoxelBlockGrid::blocks_unordered(
     std::vector<std::uint8_t>* surface_free) const {
   std::vector<std::pair<BlockCoord, const VoxelBlock*>> out;
-  std::shared_lock lock(impl_->mutex);
-  out.reserve(impl_->table.size());
+  std::lock_guard lock(impl_->create_mutex);
+  out.reserve(block_count());
   if (surface_free != nullptr) {
     surface_free->clear();
-    surface_free->reserve(impl_->table.size());
+    surface_free->reserve(block_count());
   }
-  for (const auto& [c, slot] : impl_->table) {
-    out.emplace_back(c, impl_->slot_block(slot));
-    if (surface_free != nullptr) surface_free->push_back(impl_->slot_surface_free(slot));
-  }
+  impl_->for_each_slot([&](std::uint32_t s) {
+    out.emplace_back(impl_->slot_coord(s), impl_->slot_block(s));
+    if (surface_free != nullptr) surface_free->push_back(impl_->slot_surface_free(s));
+  });
   return out;
 }
 
 void VoxelBlockGrid::set_surface_free(const BlockCoord& c, bool surface_free) {
-  std::shared_lock lock(impl_->mutex);
-  auto it = impl_->table.find(c);
-  if (it != impl_->table.end()) impl_->slot_surface_free(it->second) = surface_free ? 1 : 0;
+  const std::uint32_t slot = impl_->slot_of(c);
+  if (slot != UINT32_MAX) impl_->slot_surface_free(slot) = surface_free ? 1 : 0;
 }
 
 bool VoxelBlockGrid::surface_free(const BlockCoord& c) const {
-  std::shared_lock lock(impl_->mutex);
-  auto it = impl_->table.find(c);
-  return it != impl_->table.end() && impl_->slot_surface_free(it->second) != 0;
+  const std::uint32_t slot = impl_->slot_of(c);
+  return slot != UINT32_MAX && impl_->slot_surface_free(slot) != 0;
 }
 
 bool block_is_surface_free(const VoxelBlock& block) {

@@ -5,15 +5,20 @@
 // exist ("model only what a scene needs"); a voxel of a missing block is "unobserved" (weight 0).
 //
 // Memory: blocks live in a pool of at most `capacity_blocks` VoxelBlocks, handed out in chunks of 1024 blocks as
-// they are needed (so memory follows the blocks in use, not the capacity); the hash maps a BlockCoord to its pool
-// slot. When the pool is full, allocate() throws CapacityError (typed, loud; the message says the capacity and
-// how to raise it): never a silent stop (InfiniTAM's failure mode). Streaming (fusion/streaming.h) moves distant
-// blocks out of the pool to make room.
+// they are needed (so memory follows the blocks in use, not the capacity); a hash table maps a BlockCoord to its
+// pool slot and a second one counts the blocks per region (fusion/block_hash_table.h: 16-byte entries, twice the
+// capacity each, zero pages until used: 8 MiB of address space at the default capacity). When the pool is full,
+// allocate() throws CapacityError (typed, loud; the message says the capacity and how to raise it): never a
+// silent stop (InfiniTAM's failure mode). Streaming (fusion/streaming.h) moves distant blocks out of the pool to
+// make room.
 //
-// Thread-safety: find() and voxel reads may run concurrently with each other and with allocate(); allocate() is
-// thread-safe against other allocate() calls (each coordinate gets exactly one block however many threads ask);
-// block pointers stay valid until that block is released or the grid cleared; writing voxels of distinct blocks
-// from different threads is safe; release() and clear() need exclusive access. The grid is move-only.
+// Thread-safety: find(), region_occupied() and voxel reads take no lock (fusion/block_hash_table.h), so a raycast or
+// a volume tracker reads the grid itself, millions of look-ups a frame, with no second table; they may run
+// concurrently with each other and with allocate() (a block appears whole: published after its voxels are
+// cleared). allocate() is thread-safe against other allocate() calls (each coordinate gets exactly one block
+// however many threads ask; creating one takes a mutex, finding one does not); block pointers stay valid until
+// that block is released or the grid cleared; writing voxels of distinct blocks from different threads is safe;
+// release() and clear() need exclusive access. The grid is move-only.
 #pragma once
 
 #include <array>
@@ -80,9 +85,18 @@ class VoxelBlockGrid {
 
   const VolumeParams& params() const { return params_; }
 
-  // nullptr when the block does not exist.
+  // nullptr when the block does not exist. Lock-free.
   VoxelBlock* find(const BlockCoord& c);
   const VoxelBlock* find(const BlockCoord& c) const;
+  // The same, and the block's surface_free() flag (false for a missing block): what a raycast asks per block.
+  const VoxelBlock* find(const BlockCoord& c, bool* surface_free) const;
+
+  // Coarse occupancy for skipping empty space: a region is kRegionBlocks^3 blocks (region r holds blocks
+  // [4 r, 4 r + 4) on each axis); true when any of its blocks exists. Lock-free; kept up to date by allocate()
+  // and release().
+  static constexpr int kRegionShift = 2;
+  static constexpr int kRegionBlocks = 1 << kRegionShift;
+  bool region_occupied(int rx, int ry, int rz) const;
   // Returns the existing block or a new one with all voxels zero (unobserved). Thread-safe. Throws CapacityError.
   // With created, also whether the block was created by this call; with surface_free, where the block's
   // surface_free flag lives (valid while the block is), for a caller that sets it without another hash look-up

@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <atomic>
+#include <map>
 #include <random>
 #include <set>
 #include <thread>
 #include <tuple>
 #include <utility>
 
+#include "fusion/block_hash_table.h"
 #include "fusion/gc.h"
 
 namespace hf::fusion {
@@ -128,6 +130,97 @@ TEST(VoxelBlockGrid, HashStressWithCollidingKeys) {
     EXPECT_EQ(b->voxels[0].weight, 0);
   }
   EXPECT_EQ(grid.block_count(), coords.size());
+}
+
+// The table under the grid against a std::map model: a table for 24 keys (64 entries) with keys from a small
+// range, so probe runs are long and wrap around the array end; random inserts, updates and erasures (backward
+// shift) in random order, every key checked after every step.
+TEST(BlockHashTable, MatchesAMapThroughInsertsAndBackwardShiftErasures) {
+  BlockHashTable table(24);
+  EXPECT_EQ(table.max_entries(), 24u);
+  EXPECT_EQ(table.bytes(), 64u * 16u);
+  std::map<std::tuple<int, int, int>, std::uint32_t> model;
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> coord(-3, 3);
+  for (int step = 0; step < 4000; ++step) {
+    const int x = coord(rng), y = coord(rng), z = coord(rng);
+    const auto key = std::make_tuple(x, y, z);
+    const bool present = model.count(key) != 0;
+    if (present && rng() % 3 == 0) {
+      EXPECT_EQ(table.erase(x, y, z), model[key]);
+      model.erase(key);
+    } else if (present) {
+      const std::uint32_t v = 1 + rng() % 1000;
+      EXPECT_TRUE(table.set_value(x, y, z, v));
+      model[key] = v;
+    } else {
+      const std::uint32_t v = 1 + rng() % 1000;
+      const bool inserted = table.insert(x, y, z, v);
+      EXPECT_EQ(inserted, model.size() < 24u);
+      if (inserted) model[key] = v;
+    }
+    ASSERT_EQ(table.size(), model.size());
+    for (int a = -3; a <= 3; ++a)
+      for (int b = -3; b <= 3; ++b)
+        for (int c = -3; c <= 3; ++c) {
+          const auto it = model.find(std::make_tuple(a, b, c));
+          ASSERT_EQ(table.find(a, b, c), it == model.end() ? 0u : it->second) << "step " << step;
+        }
+  }
+  EXPECT_EQ(table.erase(9, 9, 9), 0u);
+  EXPECT_FALSE(table.set_value(9, 9, 9, 1));
+  table.clear();
+  EXPECT_EQ(table.size(), 0u);
+  EXPECT_EQ(table.find(0, 0, 0), 0u);
+}
+
+// find() needs no lock: readers looking keys up while a writer inserts see each key either absent or with its own
+// value (a torn entry would show another key's value), and every key once the writer is done.
+TEST(BlockHashTable, ReadersDuringInsertsSeeWholeEntries) {
+  constexpr int kKeys = 20000;
+  BlockHashTable table(kKeys);
+  auto value_of = [](int i) { return std::uint32_t(i) * 2654435761u | 1u; };
+  std::atomic<bool> done{false};
+  std::atomic<long> wrong{0};
+  std::vector<std::thread> readers;
+  for (int t = 0; t < 3; ++t)
+    readers.emplace_back([&, t] {
+      std::mt19937 rng(t);
+      while (!done.load()) {
+        const int i = int(rng() % kKeys);
+        const std::uint32_t v = table.find(i % 31, (i / 31) % 29, i / (31 * 29));
+        if (v != 0 && v != value_of(i)) ++wrong;
+      }
+    });
+  for (int i = 0; i < kKeys; ++i) ASSERT_TRUE(table.insert(i % 31, (i / 31) % 29, i / (31 * 29), value_of(i)));
+  done = true;
+  for (auto& r : readers) r.join();
+  EXPECT_EQ(wrong.load(), 0);
+  for (int i = 0; i < kKeys; ++i) ASSERT_EQ(table.find(i % 31, (i / 31) % 29, i / (31 * 29)), value_of(i));
+}
+
+// region_occupied follows allocate and release: a region (4^3 blocks) reads occupied while any of its blocks
+// exists, negative coordinates included (floor division by 4).
+TEST(VoxelBlockGrid, RegionOccupancyFollowsItsBlocks) {
+  VoxelBlockGrid grid(small_params());
+  EXPECT_FALSE(grid.region_occupied(0, 0, 0));
+  grid.allocate({5, 0, 0});
+  grid.allocate({7, 3, 1});
+  grid.allocate({-1, -4, -5});
+  EXPECT_TRUE(grid.region_occupied(1, 0, 0));
+  EXPECT_TRUE(grid.region_occupied(-1, -1, -2));
+  EXPECT_FALSE(grid.region_occupied(0, 0, 0));
+  EXPECT_FALSE(grid.region_occupied(-1, -1, -1));
+  EXPECT_TRUE(grid.release({5, 0, 0}));
+  EXPECT_TRUE(grid.region_occupied(1, 0, 0));  // (7, 3, 1) is still there
+  EXPECT_TRUE(grid.release({7, 3, 1}));
+  EXPECT_FALSE(grid.region_occupied(1, 0, 0));
+  bool surface_free = true;
+  EXPECT_EQ(grid.find({5, 0, 0}, &surface_free), nullptr);
+  EXPECT_FALSE(surface_free);
+  grid.clear();
+  EXPECT_FALSE(grid.region_occupied(-1, -1, -2));
+  EXPECT_EQ(grid.block_count(), 0u);
 }
 
 TEST(VoxelBlockGrid, CapacityExhaustionThrowsTypedError) {
