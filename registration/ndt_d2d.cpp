@@ -1,8 +1,5 @@
 #include "registration/ndt_d2d.h"
 
-#include <Eigen/Eigenvalues>
-#include <algorithm>
-
 #include "registration/gauss_newton.h"
 #include "registration/ndt/ndt_newton.h"
 
@@ -23,18 +20,9 @@ std::vector<NdtLevel> d2d_levels(const NdtModel& current, const NdtModel& refere
       const Eigen::Matrix3d R = T.rotation();
       for (const NdtCell& c : cur.cells()) {
         ref.neighbourhood(R * c.mean + T.translation(), 7, &cells);
-        const Eigen::Matrix3d moved = R * c.Sigma * R.transpose();
+        NdtTerm term;
         for (const NdtCell* r : cells) {
-          const Eigen::Matrix3d C = moved + r->Sigma;  // eq. 74
-          const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
-          if (es.info() != Eigen::Success || !(es.eigenvalues()(0) > 0.0)) continue;
-          const Eigen::Matrix3d C_inv =
-              es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
-          // A pair of Gaussians stands for the points of the smaller (a full cell beside a sliver of the view's
-          // edge is as strong as the sliver); the directions it constrains are the reference cell's (ndt_newton.h).
-          terms->push_back({c.mean, r->mean, C_inv,
-                            double(std::min(c.count, r->count)) * constraining_information(r->eigenvalues, r->eigenvectors,
-                                                                       ref.cell_m())});
+          if (distribution_term(c, *r, R, ref.cell_m(), &term)) terms->push_back(term);
         }
       }
     };
@@ -46,12 +34,13 @@ std::vector<NdtLevel> d2d_levels(const NdtModel& current, const NdtModel& refere
 // Cell pairs at the finest level below which the estimate is failed: a 0.1 m model of a room view has ~500 cells.
 constexpr long kMinTerms = 20;
 
-RegistrationResult solve(const RegistrationOptions& options, const std::vector<Eigen::Vector3d>& cur,
-                         const std::vector<Eigen::Vector3d>& ref, const SE3& T0) {
+RegistrationResult solve(const RegistrationOptions& options, const NdtSamples& cur, const NdtSamples& ref,
+                         const SE3& T0) {
   const NdtOptions& o = options.method_as<NdtOptions>();
-  const NdtModel cur_model = build_ndt_model(cur, o.resolutions_m(), o.grid);
-  const NdtModel ref_model = build_ndt_model(ref, o.resolutions_m(), o.grid);
-  const NdtSolveOptions so = ndt_solve_options(options, cur, double(cur_model.levels.back().size()), kMinTerms);
+  const NdtModel cur_model = build_ndt_model(cur.points, o.resolutions_m(), o.grid);
+  const NdtModel ref_model = build_ndt_model(ref.points, o.resolutions_m(), o.grid);
+  const NdtSolveOptions so =
+      ndt_solve_options(options, cur.points, double(cur_model.levels.back().size()), kMinTerms);
   return solve_ndt(d2d_levels(cur_model, ref_model), so, options.driver, T0);
 }
 

@@ -21,7 +21,7 @@ std::vector<NdtLevel> p2d_levels(const std::vector<Eigen::Vector3d>& points, con
         grid.neighbourhood(R * p + T.translation(), neighbours, &cells);
         for (const NdtCell* c : cells) {
           terms->push_back({p, c->mean, c->Sigma_inv,
-                            constraining_information(c->eigenvalues, c->eigenvectors, grid.cell_m())});
+                            constraining_information(c->eigenvalues, c->eigenvectors, grid.cell_m()), 1.0});
         }
       }
     };
@@ -30,12 +30,13 @@ std::vector<NdtLevel> p2d_levels(const std::vector<Eigen::Vector3d>& points, con
   return levels;
 }
 
-RegistrationResult solve(const RegistrationOptions& options, const std::vector<Eigen::Vector3d>& cur,
-                         const std::vector<Eigen::Vector3d>& ref, const SE3& T0) {
+RegistrationResult solve(const RegistrationOptions& options, const NdtSamples& cur, const NdtSamples& ref,
+                         const SE3& T0) {
   const NdtOptions& o = options.method_as<NdtOptions>();
-  const NdtModel model = build_ndt_model(ref, o.resolutions_m(), o.grid);
-  const NdtSolveOptions so = ndt_solve_options(options, cur, double(cur.size()), options.driver.min_inliers);
-  return solve_ndt(p2d_levels(cur, model, o.neighbours), so, options.driver, T0);
+  const NdtModel model = build_ndt_model(ref.points, o.resolutions_m(), o.grid);
+  const NdtSolveOptions so =
+      ndt_solve_options(options, cur.points, double(cur.points.size()), options.driver.min_inliers);
+  return solve_ndt(p2d_levels(cur.points, model, o.neighbours), so, options.driver, T0);
 }
 
 RegistrationOptions defaults() {

@@ -22,14 +22,47 @@ bool NdtGrid::cell_index(const Eigen::Vector3d& p, long* i, long* j, long* k) co
   return true;
 }
 
-void NdtGrid::add(const Eigen::Vector3d& p, double weight) {
+void NdtMoments::add(const Eigen::Vector3d& p, double weight, double colour) {
+  w += weight;
+  ++n;
+  s += weight * p;
+  ss += weight * p * p.transpose();
+  sc += weight * colour;
+  scc += weight * colour * colour;
+}
+
+void NdtGrid::add(const Eigen::Vector3d& p, double weight, double colour) {
   long i, j, k;
-  if (finished_ || !(weight > 0.0) || !std::isfinite(weight) || !cell_index(p, &i, &j, &k)) return;
-  Moments& m = moments_[key(i, j, k)];
-  m.w += weight;
-  ++m.n;
-  m.s += weight * p;
-  m.ss += weight * p * p.transpose();
+  if (finished_ || !(weight > 0.0) || !std::isfinite(weight) || !std::isfinite(colour) || !cell_index(p, &i, &j, &k)) {
+    return;
+  }
+  moments_[key(i, j, k)].add(p, weight, colour);
+}
+
+bool NdtGrid::key_of(const Eigen::Vector3d& p, std::uint64_t* out) const {
+  long i, j, k;
+  if (!cell_index(p, &i, &j, &k)) return false;
+  *out = key(i, j, k);
+  return true;
+}
+
+void NdtGrid::insert(std::uint64_t k, const NdtCell& cell) {
+  finished_ = true;
+  if (index_.count(k) != 0) return;
+  index_[k] = int(cells_.size());
+  cells_.push_back(cell);
+}
+
+bool make_ndt_cell(const NdtMoments& m, const NdtGridOptions& options, NdtCell* cell) {
+  if (m.n < options.min_points || m.n < 2 || !(m.w > 0.0)) return false;
+  cell->count = m.n;
+  cell->mean = m.s / m.w;
+  cell->colour_mean = m.sc / m.w;
+  cell->colour_var = std::max(0.0, m.scc / m.w - cell->colour_mean * cell->colour_mean);
+  // Eq. 63 with weights: the unbiased (reliability-weight) form reduces to 1 / (K - 1) for unit weights.
+  const double correction = double(m.n) / double(m.n - 1);
+  const Eigen::Matrix3d cov = (m.ss / m.w - cell->mean * cell->mean.transpose()) * correction;
+  return cell->mean.allFinite() && std::isfinite(cell->colour_var) && regularise_cell(cov, options, cell);
 }
 
 bool regularise_cell(const Eigen::Matrix3d& covariance, const NdtGridOptions& options, NdtCell* cell) {
@@ -60,14 +93,8 @@ void NdtGrid::finish() {
   std::sort(keys.begin(), keys.end());
   cells_.reserve(keys.size());
   for (const std::uint64_t k : keys) {
-    const Moments& m = moments_[k];
     NdtCell cell;
-    cell.count = m.n;
-    cell.mean = m.s / m.w;
-    // Eq. 63 with weights: the unbiased (reliability-weight) form reduces to 1 / (K - 1) for unit weights.
-    const double correction = double(m.n) / double(m.n - 1);
-    const Eigen::Matrix3d cov = (m.ss / m.w - cell.mean * cell.mean.transpose()) * correction;
-    if (!cell.mean.allFinite() || !regularise_cell(cov, options_, &cell)) continue;
+    if (!make_ndt_cell(moments_[k], options_, &cell)) continue;
     index_[k] = int(cells_.size());
     cells_.push_back(cell);
   }

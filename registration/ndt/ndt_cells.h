@@ -28,6 +28,10 @@ struct NdtCell {
   Eigen::Vector3d eigenvalues = Eigen::Vector3d::Zero();  // of the regularised Sigma, ascending
   Eigen::Matrix3d eigenvectors = Eigen::Matrix3d::Identity();  // columns, matching eigenvalues
   long count = 0;                                       // points in the cell
+  // The cell's colour (intensity in [0, 1]) by its weighted mean and variance, for the methods that model it
+  // (ndt-color: one component of the cell's colour mixture; mrsmap: the luminance of the surfel); 0 otherwise.
+  double colour_mean = 0.0;
+  double colour_var = 0.0;
   Eigen::Vector3d normal() const { return eigenvectors.col(0); }  // the thinnest direction
 };
 
@@ -36,6 +40,20 @@ struct NdtGridOptions {
   double eigenvalue_floor_ratio = 1e-2;
   double min_sigma_m = 1e-3;            // 1 mm: below any depth sensor's noise
 };
+
+// The weighted moments of the points of one cell (and of their colours, when given), from which a cell is made.
+struct NdtMoments {
+  double w = 0.0;
+  long n = 0;
+  Eigen::Vector3d s = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d ss = Eigen::Matrix3d::Zero();
+  double sc = 0.0, scc = 0.0;  // sum w c, sum w c^2
+  void add(const Eigen::Vector3d& p, double weight, double colour = 0.0);
+};
+
+// The Gaussian of the moments (eq. 62-63, regularised by the rule above), into cell; false for fewer than
+// options.min_points points or a non-finite result.
+bool make_ndt_cell(const NdtMoments& m, const NdtGridOptions& options, NdtCell* cell);
 
 // One resolution of the cell model: the Gaussians by integer cell coordinates.
 class NdtGrid {
@@ -55,23 +73,23 @@ class NdtGrid {
   void neighbourhood(const Eigen::Vector3d& p, int count, std::vector<const NdtCell*>* out) const;
   const std::vector<NdtCell>& cells() const { return cells_; }
 
-  // Accumulation: add points (with weights, e.g. 1), then finish() computes the Gaussians. add() after finish()
-  // is an error (ignored).
-  void add(const Eigen::Vector3d& p, double weight = 1.0);
+  // Accumulation: add points (with weights, e.g. 1, and optionally their colour), then finish() computes the
+  // Gaussians. add() after finish() is an error (ignored).
+  void add(const Eigen::Vector3d& p, double weight = 1.0, double colour = 0.0);
   void finish();
+
+  // Cells made elsewhere (ndt-color's colour components): the key of the cell containing p (false: p not finite
+  // or out of range), and insert() of a cell under a key, which finishes the grid (a key inserted twice keeps the
+  // first cell). Insert in ascending key order for a deterministic cells() order.
+  bool key_of(const Eigen::Vector3d& p, std::uint64_t* key) const;
+  void insert(std::uint64_t key, const NdtCell& cell);
 
  private:
   static std::uint64_t key(long i, long j, long k);
   bool cell_index(const Eigen::Vector3d& p, long* i, long* j, long* k) const;
-  struct Moments {
-    double w = 0.0;
-    long n = 0;
-    Eigen::Vector3d s = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d ss = Eigen::Matrix3d::Zero();
-  };
   double cell_m_ = 0.1;
   NdtGridOptions options_;
-  std::unordered_map<std::uint64_t, Moments> moments_;
+  std::unordered_map<std::uint64_t, NdtMoments> moments_;
   std::unordered_map<std::uint64_t, int> index_;  // key -> cells_ index
   std::vector<NdtCell> cells_;
   bool finished_ = false;

@@ -19,7 +19,8 @@ Vector6d newton_step(const Matrix6d& H, const Vector6d& g) {
   return -(es.eigenvectors() * lambda.cwiseInverse().asDiagonal() * es.eigenvectors().transpose()) * g;
 }
 
-// The step without its components along the degenerate eigen-directions of the balanced information.
+}  // namespace
+
 Vector6d project_out_degenerate(const Vector6d& xi, const Matrix6d& information, const Vector6d& unit_scale,
                                 double threshold) {
   const Matrix6d Hs = unit_scale.asDiagonal() * information * unit_scale.asDiagonal();
@@ -36,11 +37,28 @@ Vector6d project_out_degenerate(const Vector6d& xi, const Matrix6d& information,
   return unit_scale.cwiseProduct(xs);
 }
 
+namespace {
+
 // A direction constrains when the cell is about as thin along it as along its thinnest (variance within 4x, sigma
 // within 2x): a plane cut by the view's edge into a strip is still a plane.
 constexpr double kThinRatio = 4.0;
 
 }  // namespace
+
+bool distribution_term(const NdtCell& current, const NdtCell& reference, const Eigen::Matrix3d& R, double cell_m,
+                       NdtTerm* term) {
+  const Eigen::Matrix3d C = R * current.Sigma * R.transpose() + reference.Sigma;  // eq. 74
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+  if (es.info() != Eigen::Success || !(es.eigenvalues()(0) > 0.0)) return false;
+  // A pair of Gaussians stands for the points of the smaller (a full cell beside a sliver of the view's edge is as
+  // strong as the sliver); the directions it constrains are the reference cell's.
+  *term = {current.mean, reference.mean,
+           es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() * es.eigenvectors().transpose(),
+           double(std::min(current.count, reference.count)) *
+               constraining_information(reference.eigenvalues, reference.eigenvectors, cell_m),
+           1.0};
+  return true;
+}
 
 NdtScoreConstants ndt_score_constants(double outlier_ratio, double cell_m) {
   const double c1 = 10.0 * (1.0 - outlier_ratio);
@@ -75,8 +93,8 @@ NdtEvaluation evaluate_ndt(const std::vector<NdtTerm>& terms, const SE3& T, cons
     const Eigen::Vector3d y = term.C_inv * xd;
     const double q = xd.dot(y);
     if (!std::isfinite(q)) continue;
-    const double E = std::exp(-0.5 * k.d2 * q);
-    e.score += k.d1 * E;  // d1 < 0: each term is lowest (d1) where x' = 0
+    const double E = term.weight * std::exp(-0.5 * k.d2 * q);
+    e.score += k.d1 * E;  // d1 < 0: each term is lowest (d1 weight) where x' = 0
     ++e.count;
     if (!derivatives) continue;
     const double w = -k.d1 * k.d2 * E;  // d1 < 0: w > 0
@@ -98,7 +116,7 @@ NdtEvaluation evaluate_ndt(const std::vector<NdtTerm>& terms, const SE3& T, cons
 }
 
 RegistrationResult solve_ndt(const std::vector<NdtLevel>& levels, const NdtSolveOptions& options,
-                             const GaussNewtonOptions& driver, const SE3& T_initial) {
+                             const GaussNewtonOptions& driver, const SE3& T_initial, const SE3* T_start) {
   RegistrationResult result;
   result.T_ref_cur = T_initial;
   result.iterations_per_level.assign(levels.size(), 0);
@@ -109,7 +127,7 @@ RegistrationResult solve_ndt(const std::vector<NdtLevel>& levels, const NdtSolve
     return result;
   };
   if (levels.empty()) return fail(RegistrationStatus::no_data, "no NDT levels");
-  SE3 T = T_initial;
+  SE3 T = T_start != nullptr && T_start->is_finite() ? *T_start : T_initial;
   std::vector<NdtTerm> terms;
   Vector6d last_step = Vector6d::Zero();
   NdtEvaluation last;

@@ -26,6 +26,7 @@
 
 #include <Eigen/Core>
 
+#include "registration/ndt/ndt_cells.h"
 #include "registration/registration.h"
 
 namespace hf {
@@ -35,7 +36,19 @@ struct NdtTerm {
   Eigen::Vector3d mean;           // reference frame
   Eigen::Matrix3d C_inv;          // inverse covariance of x - mean
   Eigen::Matrix3d W_information;  // the constraining part of C_inv (see above)
+  double weight = 1.0;            // of the term in the score (ndt-color: the colour kernel, eq. 68-69)
 };
+
+// The distribution-to-distribution term of a current cell moved by the rotation R against a reference cell
+// (eq. 74: C = R Sigma_cur R^T + Sigma_ref, held fixed within an iteration), standing for the points of the smaller
+// cell and constraining the reference cell's directions; false when C is not positive definite.
+bool distribution_term(const NdtCell& current, const NdtCell& reference, const Eigen::Matrix3d& R, double cell_m,
+                       NdtTerm* term);
+
+// The step without its components along the degenerate eigen-directions of the balanced information (unit_scale
+// from balanced_units, directions with eigenvalue <= threshold * the largest).
+Vector6d project_out_degenerate(const Vector6d& xi, const Matrix6d& information, const Vector6d& unit_scale,
+                                double threshold);
 
 // Magnusson 2007 eq. 6.8: c1 = 10 (1 - outlier_ratio), c2 = outlier_ratio / cell_m^3, d3 = -log c2,
 // d1 = -log(c1 + c2) - d3, d2 = -2 log((-log(c1 exp(-1/2) + c2) - d3) / d1).
@@ -73,9 +86,10 @@ struct NdtSolveOptions {
   Vector6d unit_scale = Vector6d::Ones();  // balanced_units of the current data
 };
 
-// Coarse-to-fine Newton over the levels (coarsest first) from T_initial, then the outcome by the driver's rules
-// (classify_outcome) with `driver`'s thresholds. Never throws, never returns a non-finite pose.
+// Coarse-to-fine Newton over the levels (coarsest first) from T_start (T_initial when null: mrsmap starts from its
+// Levenberg-Marquardt estimate), then the outcome by the driver's rules (classify_outcome) with `driver`'s
+// thresholds, judged against T_initial. Never throws, never returns a non-finite pose.
 RegistrationResult solve_ndt(const std::vector<NdtLevel>& levels, const NdtSolveOptions& options,
-                             const GaussNewtonOptions& driver, const SE3& T_initial);
+                             const GaussNewtonOptions& driver, const SE3& T_initial, const SE3* T_start = nullptr);
 
 }  // namespace hf

@@ -53,12 +53,12 @@ RegistrationResult ndt_align_checked(const FramePyramid& current, const FramePyr
     return r;
   }
   const long needed = options.grid.min_points;
-  const std::vector<Eigen::Vector3d> cur = sample_vertices(current.levels[0], options.point_stride);
-  const std::vector<Eigen::Vector3d> ref = sample_vertices(reference.levels[0], options.point_stride);
-  if (long(cur.size()) < needed || long(ref.size()) < needed) {
+  const NdtSamples cur = sample_ndt(current.levels[0], options.point_stride);
+  const NdtSamples ref = sample_ndt(reference.levels[0], options.point_stride);
+  if (long(cur.points.size()) < needed || long(ref.points.size()) < needed) {
     r.status = RegistrationStatus::no_data;
-    r.message = std::string("too few valid points in the ") + (long(cur.size()) < needed ? "current" : "reference") +
-                " frame";
+    r.message = std::string("too few valid points in the ") +
+                (long(cur.points.size()) < needed ? "current" : "reference") + " frame";
     return r;
   }
   try {
@@ -86,8 +86,9 @@ class NdtRegistration final : public Registration {
   RegistrationResult align(const FramePyramid& current, const FramePyramid& reference,
                            const SE3& T_ref_cur_initial) override {
     return ndt_align_checked(current, reference, T_ref_cur_initial, options_,
-                             [&](const std::vector<Eigen::Vector3d>& cur, const std::vector<Eigen::Vector3d>& ref,
-                                 const SE3& T0) { return solve_(options_, cur, ref, T0); });
+                             [&](const NdtSamples& cur, const NdtSamples& ref, const SE3& T0) {
+                               return solve_(options_, cur, ref, T0);
+                             });
   }
   std::string name() const override { return name_; }
   const RegistrationOptions& options() const override { return options_; }
@@ -125,17 +126,21 @@ Vector6d point_units(const std::vector<Eigen::Vector3d>& points) {
   return s;
 }
 
-std::vector<Eigen::Vector3d> sample_vertices(const FramePyramidLevel& level, int stride) {
-  std::vector<Eigen::Vector3d> points;
+NdtSamples sample_ndt(const FramePyramidLevel& level, int stride) {
+  NdtSamples samples;
+  const bool colour = level.has_intensity() && level.intensity.width() == level.vertices.width() &&
+                      level.intensity.height() == level.vertices.height();
   for (int y = 0; y < level.vertices.height(); y += stride) {
     for (int x = 0; x < level.vertices.width(); x += stride) {
       const hf_float4& v = level.vertices(x, y);
-      if (v.w != 0.0f && std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z)) {
-        points.emplace_back(v.x, v.y, v.z);
-      }
+      if (v.w == 0.0f || !std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) continue;
+      const float c = colour ? level.intensity(x, y) : 0.0f;
+      if (colour && !std::isfinite(c)) continue;
+      samples.points.emplace_back(v.x, v.y, v.z);
+      if (colour) samples.intensity.push_back(double(c));
     }
   }
-  return points;
+  return samples;
 }
 
 }  // namespace hf

@@ -31,12 +31,20 @@ struct NdtOptions : MethodOptionsBase<NdtOptions> {
   std::vector<double> resolutions_m() const;
 };
 
+// The points an NDT method works on: every point_stride-th valid vertex of a frame's finest level (camera frame,
+// metres) and, when the frame has colour, the intensity of its pixel ([0, 1], one per point; empty otherwise).
+struct NdtSamples {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> intensity;
+  bool has_intensity() const { return !points.empty() && intensity.size() == points.size(); }
+};
+NdtSamples sample_ndt(const FramePyramidLevel& level, int stride);
+
 // What the NDT methods share around their maths: input checks (no_data for an empty pyramid or a frame without
 // enough points, failed for a non-finite guess), the reverse alignment of large motions (verify_large_motion:
 // Newton on the NDT score has a basin too) and exceptions turned into a failed result.
-using NdtAlign = std::function<RegistrationResult(const std::vector<Eigen::Vector3d>& current_points,
-                                                  const std::vector<Eigen::Vector3d>& reference_points,
-                                                  const SE3& T_initial)>;
+using NdtAlign =
+    std::function<RegistrationResult(const NdtSamples& current, const NdtSamples& reference, const SE3& T_initial)>;
 RegistrationResult ndt_align_checked(const FramePyramid& current, const FramePyramid& reference,
                                      const SE3& T_initial, const RegistrationOptions& options, const NdtAlign& align);
 // The solver's settings for one alignment: the driver's iterations, the method's outlier ratio, the current
@@ -45,15 +53,12 @@ NdtSolveOptions ndt_solve_options(const RegistrationOptions& options, const std:
                                   double rows_possible, long min_terms);
 // The Registration of an NDT method: its registry name, its options and how one alignment runs on the sampled
 // points (solve), wrapped in ndt_align_checked. Validates the options (hf::Error).
-using NdtSolve = RegistrationResult (*)(const RegistrationOptions& options, const std::vector<Eigen::Vector3d>& current,
-                                        const std::vector<Eigen::Vector3d>& reference, const SE3& T_initial);
+using NdtSolve = RegistrationResult (*)(const RegistrationOptions& options, const NdtSamples& current,
+                                        const NdtSamples& reference, const SE3& T_initial);
 std::unique_ptr<Registration> make_ndt_registration(const std::string& name, const RegistrationOptions& options,
                                                     NdtSolve solve);
 
 // balanced_units() of a point set: S = diag(1/L x3, 1 x3), L the RMS distance of the points (>= 1 mm).
 Vector6d point_units(const std::vector<Eigen::Vector3d>& points);
-
-// Camera-frame points of every stride-th valid vertex of `level`.
-std::vector<Eigen::Vector3d> sample_vertices(const FramePyramidLevel& level, int stride);
 
 }  // namespace hf

@@ -12,6 +12,7 @@
 #include "registration/ndt/ndt_from_tsdf.h"
 #include "registration/ndt/ndt_newton.h"
 #include "registration/ndt/ndt_options.h"
+#include "registration/ndt_color.h"
 
 namespace hf {
 namespace {
@@ -104,7 +105,7 @@ RegistrationResult align_with(const std::string& method, const test::FramePair& 
 // so (ndt_newton.h: the information keeps only the directions a cell is thin in).
 TEST(Ndt, PlaneReportsItsFreeDirectionsAsDegenerate) {
   const test::FramePair pair = test::make_pair("wall", 5, 6, true);
-  for (const std::string method : {"ndt-p2d", "ndt-d2d"}) {
+  for (const std::string method : {"ndt-p2d", "ndt-d2d", "ndt-color"}) {
     const RegistrationResult r = align_with(method, pair);
     EXPECT_EQ(r.status, RegistrationStatus::degenerate) << method << " " << r.message;
     EXPECT_EQ(r.degenerate_dims, 3) << method;
@@ -162,6 +163,42 @@ TEST(Ndt, EmptyAndDegenerateInputGiveNoCells) {
   EXPECT_TRUE(one.levels[0].empty());
   fusion::VoxelBlockGrid empty_grid(fusion::VolumeParams{});
   EXPECT_TRUE(build_ndt_model_from_tsdf(empty_grid, {0.1}).levels[0].empty());
+}
+
+// ndt-color's per-cell colour model (eq. 67): two colour clusters give two components with the clusters' means
+// (within 4 standard errors, sigma / sqrt(n) ~ 1.5 mm of intensity), shares and spreads; one flat colour gives one
+// component at the variance floor; no colours, none.
+TEST(Ndt, ColourMixtureSeparatesTheColoursOfACell) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> dark(0.2, 0.02), light(0.7, 0.03);
+  std::vector<double> colours;
+  for (int i = 0; i < 300; ++i) colours.push_back(dark(rng));
+  for (int i = 0; i < 200; ++i) colours.push_back(light(rng));
+  colours.push_back(std::nan(""));  // ignored
+  const std::vector<ColourComponent> mix = colour_mixture(colours, 2, 5, 0.01);
+  ASSERT_EQ(mix.size(), 2u);
+  EXPECT_NEAR(mix[0].mean, 0.2, 4 * 0.02 / std::sqrt(300.0));
+  EXPECT_NEAR(mix[1].mean, 0.7, 4 * 0.03 / std::sqrt(200.0));
+  EXPECT_NEAR(mix[0].alpha, 0.6, 0.01);
+  EXPECT_NEAR(std::sqrt(mix[0].var), 0.02, 0.004);
+  EXPECT_NEAR(std::sqrt(mix[1].var), 0.03, 0.006);
+  const std::vector<ColourComponent> flat = colour_mixture(std::vector<double>(50, 0.5), 3, 5, 0.03);
+  ASSERT_EQ(flat.size(), 1u);
+  EXPECT_NEAR(flat[0].mean, 0.5, 1e-12);
+  EXPECT_NEAR(flat[0].var, 0.03 * 0.03, 1e-12);
+  EXPECT_TRUE(colour_mixture({}, 3, 5, 0.03).empty());
+}
+
+// The colour methods need colour: a frame without it is no_data, with the guess kept.
+TEST(Ndt, ColourMethodsWithoutColourAreNoData) {
+  const test::FramePair pair = test::make_pair("room", 0, 1, false);
+  FramePyramid grey = pair.current;
+  for (auto& level : grey.levels) level.intensity = IntensityImage();
+  for (const std::string method : {"ndt-color"}) {
+    const RegistrationResult r = make_registration(method)->align(grey, pair.reference, SE3());
+    test::expect_finite(r);
+    EXPECT_EQ(r.status, RegistrationStatus::no_data) << method << " " << r.message;
+  }
 }
 
 }  // namespace
