@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "core/filters.h"
 #include "core/normals.h"
+#include "core/push_pull.h"
 #include "core/pyramid.h"
 
 namespace hf {
@@ -37,6 +38,8 @@ FramePyramid build_frame_pyramid(const DepthImage& depth, const ColorImage* colo
   if (options.levels < 1) throw Error("frame pyramid: levels must be >= 1, got " + std::to_string(options.levels));
   if (options.first_level < 0 || options.first_level > 4)
     throw Error("frame pyramid: first_level must be in [0, 4], got " + std::to_string(options.first_level));
+  if (options.fill_holes_levels < 0 || options.fill_holes_levels > 8)
+    throw Error("frame pyramid: fill_holes_levels must be in [0, 8], got " + std::to_string(options.fill_holes_levels));
   check_size(depth.width(), depth.height(), camera, "the depth image");
   if (color != nullptr) check_size(color->width(), color->height(), camera, "the colour image");
 
@@ -47,6 +50,7 @@ FramePyramid build_frame_pyramid(const DepthImage& depth, const ColorImage* colo
     if (!keep) z = 0.0f;
   }
   for (int l = 0; l < options.first_level; ++l) d = pyr_down_depth(d);
+  if (options.fill_holes_levels > 0) push_pull_fill_depth(d, PushPullOptions{options.fill_holes_levels});
   if (options.bilateral_filter) d = bilateral_filter_depth(d);
   const std::vector<DepthImage> depths = build_depth_pyramid(d, options.levels);
 

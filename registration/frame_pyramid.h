@@ -42,6 +42,11 @@ struct FramePyramidOptions {
   // intensity is Gaussian-downsampled the same number of times. Tracking at 320x240 from a 640x480 sensor thus
   // never pays for full-resolution filtering, vertex and normal maps.
   int first_level = 0;
+  // Push-pull hole fill of the tracking depth (core/push_pull.h, Siekawa), after the first_level halvings and
+  // before the bilateral filter: 0 = off; L > 0 fills a hole pixel when its aligned 2^L x 2^L block at that
+  // resolution holds a measurement (small holes only). The tracking pyramid only: integration never sees it.
+  // Off by default: bench/results/fewer_rays_render.md (depth holes) has the ATE with and without.
+  int fill_holes_levels = 0;
 };
 
 // From a depth image (metres, 0/NaN invalid) and an optional colour image of the same size (nullptr: no

@@ -127,6 +127,7 @@ void visit(V&& v, FramePyramidOptions& p) {
   v("bilateral_filter", p.bilateral_filter);
   v("max_depth_m", p.max_depth_m);
   v("min_depth_m", p.min_depth_m);
+  v("fill_holes_levels", p.fill_holes_levels);
 }
 // The driver's and the method's own knobs, by the keys registration declares (registration.h OptionVisitor).
 template <class V>
@@ -289,6 +290,8 @@ void PipelineConfig::validate() const {
   if (!(integrate.observation_weight > 0 && std::isfinite(integrate.observation_weight)))
     throw Error("integrate.observation_weight must be positive");
   if (pyramid.levels < 1 || pyramid.levels > 6) throw Error("pyramid.levels must be in [1, 6]");
+  if (pyramid.fill_holes_levels < 0 || pyramid.fill_holes_levels > 8)
+    throw Error("pyramid.fill_holes_levels must be in [0, 8]");
   if (tracking_level < 0 || tracking_level > 2) throw Error("tracking_level must be 0, 1 or 2");
   if (registration_options) registration_options->validate();
   if (!(max_speed_m_per_s > 0)) throw Error("max_speed_m_per_s must be positive");

@@ -48,6 +48,25 @@ TEST(FramePyramid, RejectsMismatchedSizes) {
   EXPECT_THROW(build_frame_pyramid(DepthImage(cam.width, cam.height, 1.0f), nullptr, cam, o), Error);
 }
 
+TEST(FramePyramid, FillHolesLevelsFillsOnlySmallHolesOfTheTrackingDepth) {
+  const PinholeCamera cam = PinholeCamera::preset("ros").scaled(2);  // 160x120
+  DepthImage depth(cam.width, cam.height, 1.5f);
+  for (int y = 40; y < 42; ++y)
+    for (int x = 60; x < 62; ++x) depth(x, y) = 0.0f;  // a 2x2 hole inside one aligned 4x4 block
+  for (int y = 80; y < 112; ++y)
+    for (int x = 96; x < 128; ++x) depth(x, y) = 0.0f;  // a 32x32 hole: wider than 2^2
+  FramePyramidOptions o;
+  o.bilateral_filter = false;
+  EXPECT_EQ(build_frame_pyramid(depth, nullptr, cam, o).levels[0].vertices(60, 40).w, 0.0f);  // off by default
+  o.fill_holes_levels = 2;
+  const FramePyramid p = build_frame_pyramid(depth, nullptr, cam, o);
+  EXPECT_EQ(p.levels[0].vertices(60, 40).w, 1.0f);
+  EXPECT_FLOAT_EQ(p.levels[0].vertices(61, 41).z, 1.5f);
+  EXPECT_EQ(p.levels[0].vertices(112, 96).w, 0.0f);
+  o.fill_holes_levels = 9;
+  EXPECT_THROW(build_frame_pyramid(depth, nullptr, cam, o), Error);
+}
+
 TEST(FramePyramid, ModelPyramidKeepsLevelZeroMaps) {
   const PinholeCamera cam = PinholeCamera::preset("ros").scaled(2);
   const FramePyramid f = build_frame_pyramid(DepthImage(cam.width, cam.height, 1.5f), nullptr, cam);
