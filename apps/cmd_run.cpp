@@ -70,13 +70,13 @@ RunView start_viewer(const RunOptions& o, const FrameSource& source, const slam:
   auto saved = std::make_shared<int>(0);
   control.observe = [raw, &pipeline, saved, out = o.out, stop = view.stop, interrupt](const RgbdFrame& frame,
                                                                                        const slam::FrameResult& r) {
-    raw->observe(frame, r, pipeline.map().block_count(), pipeline.map().memory_bytes());
+    raw->observe(frame, r, pipeline.map());
     if (raw->controller().take_save_request()) {
       const std::string path = out + "/mesh_view_" + std::to_string((*saved)++) + ".ply";
       write_ply(path, pipeline.extract_mesh());
       std::cerr << "\nviewer: saved " << path << "\n";
     }
-    raw->controller().wait_for_turn();
+    raw->hold(pipeline.map());
     if (raw->controller().quit_flag()->load() || interrupt->load()) stop->store(true);
   };
   control.stop = view.stop.get();

@@ -73,19 +73,29 @@ uniform mat4 clip;
 void main() { gl_Position = clip * (T_camera_world * vec4(position_world, 1.0)); }
 )";
 
-const char* kPointVertex = R"(#version 330 core
-layout(location = 0) in vec3 position_world;
-layout(location = 1) in vec3 color;
-uniform mat4 T_camera_world;
-uniform mat4 clip;
-out vec3 v_color;
-void main() { gl_Position = clip * (T_camera_world * vec4(position_world, 1.0)); v_color = color; gl_PointSize = 2.0; }
+// The backdrop: a quad over the viewport; each fragment takes its texel (nearest, row 0 at the top) and is put at
+// that texel's depth through the same perspective mapping as pinhole_clip (z_ndc = a + b / Z).
+const char* kBackdropVertex = R"(#version 330 core
+layout(location = 0) in vec2 corner;
+void main() { gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0); }
 )";
 
-const char* kPointFragment = R"(#version 330 core
-in vec3 v_color;
+const char* kBackdropFragment = R"(#version 330 core
+uniform sampler2D image;
+uniform sampler2D depth_m;
+uniform vec4 viewport;
+uniform vec2 depth_map;
 out vec4 frag;
-void main() { frag = vec4(v_color, 1.0); }
+void main() {
+  ivec2 size = textureSize(image, 0);
+  vec2 t = (gl_FragCoord.xy - viewport.xy) / viewport.zw * vec2(size);
+  ivec2 texel = ivec2(clamp(floor(t), vec2(0.0), vec2(size - 1)));
+  texel.y = size.y - 1 - texel.y;
+  float z = texelFetch(depth_m, texel, 0).r;
+  if (!(z > 0.0)) discard;
+  gl_FragDepth = clamp(0.5 * (depth_map.x + depth_map.y / z) + 0.5, 0.0, 1.0);
+  frag = vec4(texelFetch(image, texel, 0).rgb, 1.0);
+}
 )";
 
 const char* kLineFragment = R"(#version 330 core
@@ -97,8 +107,8 @@ void main() { frag = vec4(color, 1.0); }
 }  // namespace
 
 struct MeshRenderer::Gl {
-  GLuint mesh_program = 0, line_program = 0, point_program = 0;
-  GLuint point_vao = 0, point_vbo = 0;
+  GLuint mesh_program = 0, line_program = 0, backdrop_program = 0;
+  GLuint backdrop_vao = 0, backdrop_vbo = 0, backdrop_textures[2] = {0, 0};  // image, depth
   GLuint vao = 0, vbo = 0, ebo = 0;
   GLuint line_vao = 0, line_vbo = 0;
   GLuint fbo = 0, color_rb = 0, depth_rb = 0;
@@ -108,9 +118,22 @@ struct MeshRenderer::Gl {
 MeshRenderer::MeshRenderer() : gl_(std::make_unique<Gl>()) {
   gl_->mesh_program = link_program(kMeshVertex, kMeshFragment);
   gl_->line_program = link_program(kLineVertex, kLineFragment);
-  gl_->point_program = link_program(kPointVertex, kPointFragment);
-  glGenVertexArrays(1, &gl_->point_vao);
-  glGenBuffers(1, &gl_->point_vbo);
+  gl_->backdrop_program = link_program(kBackdropVertex, kBackdropFragment);
+  glGenVertexArrays(1, &gl_->backdrop_vao);
+  glGenBuffers(1, &gl_->backdrop_vbo);
+  const float corners[] = {0, 0, 1, 0, 0, 1, 1, 1};
+  glBindVertexArray(gl_->backdrop_vao);
+  glBindBuffer(GL_ARRAY_BUFFER, gl_->backdrop_vbo);
+  glBufferData(GL_ARRAY_BUFFER, sizeof corners, corners, GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 0, nullptr);
+  glBindVertexArray(0);
+  glGenTextures(2, gl_->backdrop_textures);
+  for (GLuint t : gl_->backdrop_textures) {
+    glBindTexture(GL_TEXTURE_2D, t);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  }
   glGenVertexArrays(1, &gl_->vao);
   glGenBuffers(1, &gl_->vbo);
   glGenBuffers(1, &gl_->ebo);
@@ -121,9 +144,10 @@ MeshRenderer::MeshRenderer() : gl_(std::make_unique<Gl>()) {
 MeshRenderer::~MeshRenderer() {
   glDeleteProgram(gl_->mesh_program);
   glDeleteProgram(gl_->line_program);
-  glDeleteProgram(gl_->point_program);
-  glDeleteVertexArrays(1, &gl_->point_vao);
-  glDeleteBuffers(1, &gl_->point_vbo);
+  glDeleteProgram(gl_->backdrop_program);
+  glDeleteVertexArrays(1, &gl_->backdrop_vao);
+  glDeleteBuffers(1, &gl_->backdrop_vbo);
+  glDeleteTextures(2, gl_->backdrop_textures);
   glDeleteVertexArrays(1, &gl_->vao);
   glDeleteBuffers(1, &gl_->vbo);
   glDeleteBuffers(1, &gl_->ebo);
@@ -173,31 +197,43 @@ void MeshRenderer::set_mesh(const TriangleMesh& mesh) {
   triangles_ = int(idx.size() / 3);
 }
 
-void MeshRenderer::set_points(const std::vector<Eigen::Vector3f>& points, const std::vector<Rgb8>& colors) {
-  std::vector<float> v;
-  v.reserve(points.size() * 6);
-  for (size_t i = 0; i < points.size(); ++i) {
-    const Rgb8 c = i < colors.size() ? colors[i] : Rgb8{255, 255, 255};
-    v.insert(v.end(), {points[i].x(), points[i].y(), points[i].z(), c.r / 255.0f, c.g / 255.0f, c.b / 255.0f});
-  }
-  glBindVertexArray(gl_->point_vao);
-  glBindBuffer(GL_ARRAY_BUFFER, gl_->point_vbo);
-  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(v.size() * sizeof(float)), v.data(), GL_DYNAMIC_DRAW);
-  for (GLuint a = 0; a < 2; ++a) {
-    glEnableVertexAttribArray(a);
-    glVertexAttribPointer(a, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
-                          reinterpret_cast<const void*>(size_t(a) * 3 * sizeof(float)));
-  }
-  glBindVertexArray(0);
-  points_ = int(points.size());
+void MeshRenderer::set_backdrop(const ColorImage& image, const DepthImage& depth_m) {
+  backdrop_ = !image.empty();
+  if (!backdrop_) return;
+  if (depth_m.width() != image.width() || depth_m.height() != image.height())
+    throw Error("viewer: the backdrop's image and depth differ in size");
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glBindTexture(GL_TEXTURE_2D, gl_->backdrop_textures[0]);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, image.width(), image.height(), 0, GL_RGB, GL_UNSIGNED_BYTE, image.data());
+  glBindTexture(GL_TEXTURE_2D, gl_->backdrop_textures[1]);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, depth_m.width(), depth_m.height(), 0, GL_RED, GL_FLOAT, depth_m.data());
+  glBindTexture(GL_TEXTURE_2D, 0);
 }
 
 void MeshRenderer::draw(const PinholeCamera& camera, const SE3& T_world_camera, const std::vector<Polyline>& lines,
                         bool use_colors) {
-  const glm::mat4 clip = pinhole_clip(camera, 0.05, 50.0);
+  const double near_m = 0.05, far_m = 50.0;
+  const glm::mat4 clip = pinhole_clip(camera, near_m, far_m);
   const glm::mat4 T_camera_world = to_glm(T_world_camera.inverse().matrixf());
   glEnable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);  // back faces get the ambient term, as in the raycast
+  if (backdrop_) {
+    GLint vp[4] = {0, 0, 0, 0};
+    glGetIntegerv(GL_VIEWPORT, vp);
+    const GLuint p = gl_->backdrop_program;
+    glUseProgram(p);
+    glUniform1i(glGetUniformLocation(p, "image"), 0);
+    glUniform1i(glGetUniformLocation(p, "depth_m"), 1);
+    glUniform4f(glGetUniformLocation(p, "viewport"), float(vp[0]), float(vp[1]), float(vp[2]), float(vp[3]));
+    glUniform2f(glGetUniformLocation(p, "depth_map"), float((far_m + near_m) / (far_m - near_m)),
+                float(-2.0 * far_m * near_m / (far_m - near_m)));
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, gl_->backdrop_textures[1]);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, gl_->backdrop_textures[0]);
+    glBindVertexArray(gl_->backdrop_vao);
+    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+  }
   if (triangles_ > 0) {
     glUseProgram(gl_->mesh_program);
     glUniformMatrix4fv(glGetUniformLocation(gl_->mesh_program, "T_camera_world"), 1, GL_FALSE,
@@ -206,15 +242,6 @@ void MeshRenderer::draw(const PinholeCamera& camera, const SE3& T_world_camera, 
     glUniform1i(glGetUniformLocation(gl_->mesh_program, "use_colors"), use_colors ? 1 : 0);
     glBindVertexArray(gl_->vao);
     glDrawElements(GL_TRIANGLES, triangles_ * 3, GL_UNSIGNED_INT, nullptr);
-  }
-  if (points_ > 0) {
-    glEnable(GL_PROGRAM_POINT_SIZE);
-    glUseProgram(gl_->point_program);
-    glUniformMatrix4fv(glGetUniformLocation(gl_->point_program, "T_camera_world"), 1, GL_FALSE,
-                       glm::value_ptr(T_camera_world));
-    glUniformMatrix4fv(glGetUniformLocation(gl_->point_program, "clip"), 1, GL_FALSE, glm::value_ptr(clip));
-    glBindVertexArray(gl_->point_vao);
-    glDrawArrays(GL_POINTS, 0, points_);
   }
   glUseProgram(gl_->line_program);
   glUniformMatrix4fv(glGetUniformLocation(gl_->line_program, "T_camera_world"), 1, GL_FALSE,

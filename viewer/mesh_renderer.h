@@ -39,8 +39,13 @@ class MeshRenderer {
   // gets face normals (flat shading).
   void set_mesh(const TriangleMesh& mesh);
   bool has_mesh() const { return triangles_ > 0; }
-  // Uploads a coloured point cloud (world frame; replacing the previous one), drawn unshaded with the mesh.
-  void set_points(const std::vector<Eigen::Vector3f>& points_world, const std::vector<Rgb8>& colors);
+  // Uploads a backdrop: an image with a depth per pixel (metres along the optical axis, 0 = nothing there), such as
+  // a raycast of the TSDF (fusion/raycast.h), drawn first in every draw() over the whole viewport, each pixel at its
+  // depth, so the mesh and lines drawn after it are hidden where the backdrop's surface is nearer. Pixels of depth 0
+  // are left as they were (the clear colour). The backdrop must have been rendered with the camera and pose that
+  // draw() / render() are given (same size for render(); a viewport of another size scales it, nearest texel), or
+  // lines land off its surfaces. An empty image removes it.
+  void set_backdrop(const ColorImage& image, const DepthImage& depth_m);
 
   // Draws the mesh and lines from T_world_camera with `camera` into the framebuffer and returns the image (RGB,
   // row 0 at the top).
@@ -56,7 +61,7 @@ class MeshRenderer {
   struct Gl;
   std::unique_ptr<Gl> gl_;
   int triangles_ = 0;
-  int points_ = 0;
+  bool backdrop_ = false;
 };
 
 // The frustum of a camera at T_world_camera as line segments, `depth_m` deep.

@@ -1,5 +1,6 @@
 #include "viewer/run_viewer.h"
 
+#include <chrono>
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
@@ -19,8 +20,6 @@ namespace hf::viewer {
 namespace {
 
 constexpr int kWindowW = 1280, kWindowH = 720, kViewW = 853;  // the 3-D view takes the left two thirds
-constexpr size_t kMaxPoints = 3'000'000;                     // 36 MB of model points
-constexpr int kPointStride = 8;                               // one pixel in 8 x 8 per integrated frame
 
 const char* kQuadVertex = R"(#version 330 core
 layout(location = 0) in vec2 corner;
@@ -55,13 +54,46 @@ ColorImage depth_as_grey(const DepthImage& d) {
   return out;
 }
 
+// A model raycast and the view it was taken from.
+struct ModelView {
+  PinholeCamera camera;
+  SE3 T_world_view;
+  ColorImage shaded;
+  DepthImage depth;
+};
+
+ModelView render_model(const fusion::VoxelBlockGrid& map, const PinholeCamera& camera, const SE3& T_world_view) {
+  fusion::RaycastResult r = fusion::raycast(map, camera, T_world_view, model_view_options());
+  return {camera, T_world_view, std::move(r.shaded), std::move(r.depth)};
+}
+
+// The window's model view size for a viewport: its aspect, at most kModelViewMaxPx on the longer side.
+PinholeCamera model_view_camera(int viewport_w, int viewport_h) {
+  const double s = std::min(1.0, double(kModelViewMaxPx) / std::max(viewport_w, viewport_h));
+  return view_camera(std::max(1, int(viewport_w * s)), std::max(1, int(viewport_h * s)));
+}
+
+bool same_view(const PinholeCamera& a, const SE3& Ta, const PinholeCamera& b, const SE3& Tb) {
+  return a.width == b.width && a.height == b.height && (Ta.matrix() - Tb.matrix()).norm() < 1e-9;
+}
+
 struct Shot {
   std::string path;
+  size_t track = 0;  // what the trajectory held at that frame
   SE3 T_world_camera;
-  size_t points = 0, track = 0;  // what the model and trajectory held at that frame
+  ModelView model;
 };
 
 }  // namespace
+
+fusion::RaycastOptions model_view_options() {
+  fusion::RaycastOptions o;
+  o.max_depth_m = 20.0;
+  o.refine_tol_vox = 0.05;
+  o.color = false;
+  o.shade = true;
+  return o;
+}
 
 std::string numbered_screenshot(const std::string& path, long index) {
   const std::filesystem::path p(path);
@@ -80,9 +112,15 @@ struct RunViewer::Impl {
   // The snapshot (tracking thread writes, window thread reads).
   ColorImage color;
   DepthImage depth;
-  std::vector<Eigen::Vector3f> points, track, lost_marks;
-  std::vector<Rgb8> point_colors;
+  std::vector<Eigen::Vector3f> track, lost_marks;
   std::optional<SE3> pose;
+  // The window's model view: what it asks for (request_*), what it has (model, model_version).
+  std::optional<std::pair<PinholeCamera, SE3>> request;
+  std::optional<ModelView> model;
+  long model_version = 0;
+  bool map_changed = true;  // since the last model view
+  std::chrono::steady_clock::time_point last_model{};
+  double last_model_s = 0.0;  // what the last model view's raycast took
   std::string status;
   long version = 0;
   std::deque<Shot> shots;
@@ -93,6 +131,7 @@ struct RunViewer::Impl {
   std::thread thread;
 
   void run();
+  void serve_model_view(const fusion::VoxelBlockGrid& map);
   void render_headless(MeshRenderer& renderer);
   void render_window(GlContext& context, MeshRenderer& renderer);
   std::vector<Polyline> lines(size_t track_count, const std::optional<SE3>& current) const;
@@ -149,16 +188,12 @@ void RunViewer::Impl::render_headless(MeshRenderer& renderer) {
     std::unique_lock<std::mutex> lock(mutex);
     changed.wait(lock, [this] { return !shots.empty() || finishing; });
     if (!shots.empty()) {
-      const Shot shot = shots.front();
+      const Shot shot = std::move(shots.front());
       shots.pop_front();
-      const std::vector<Eigen::Vector3f> p(points.begin(), points.begin() + long(shot.points));
-      const std::vector<Rgb8> c(point_colors.begin(), point_colors.begin() + long(shot.points));
       const std::vector<Polyline> l = lines(shot.track, shot.T_world_camera);
       lock.unlock();
-      ViewController follow;
-      follow.reset(shot.T_world_camera);
-      renderer.set_points(p, c);
-      write_color_png(shot.path, renderer.render(camera, follow.T_world_view(), l, false));
+      renderer.set_backdrop(shot.model.shaded, shot.model.depth);
+      write_color_png(shot.path, renderer.render(shot.model.camera, shot.model.T_world_view, l, false));
       continue;
     }
     // Finishing and every shot written: the final mesh from the last pose, as render.png shows it.
@@ -166,7 +201,7 @@ void RunViewer::Impl::render_headless(MeshRenderer& renderer) {
       const TriangleMesh mesh = *final_mesh;
       const SE3 at = final_pose;
       lock.unlock();
-      renderer.set_points({}, {});
+      renderer.set_backdrop({}, {});
       renderer.set_mesh(mesh);
       write_color_png(options.screenshot, renderer.render(camera, at));
     }
@@ -212,18 +247,27 @@ void RunViewer::Impl::render_window(GlContext& context, MeshRenderer& renderer) 
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   }
   OrbitInput orbit(window);
-  long seen = -1;
+  long seen = -1, model_seen = 0;
   bool mesh_loaded = false;
   std::vector<Polyline> l;
   std::optional<SE3> current;
+  std::optional<std::pair<PinholeCamera, SE3>> shown;  // the model view on screen: its camera and pose
   while (!glfwWindowShouldClose(window) && !controller.quit_flag()->load()) {
     glfwWaitEventsTimeout(1.0 / 30.0);
     orbit.poll(controller);
+    int fw = 0, fh = 0;
+    glfwGetFramebufferSize(window, &fw, &fh);
+    const int vw = fw * kViewW / kWindowW;
     {
       std::lock_guard<std::mutex> lock(mutex);
+      if (!final_mesh && vw > 0 && fh > 0) request = {model_view_camera(vw, fh), controller.T_world_view()};
+      if (model_version != model_seen && model && !mesh_loaded) {
+        model_seen = model_version;
+        renderer.set_backdrop(model->shaded, model->depth);
+        shown = {model->camera, model->T_world_view};
+      }
       if (version != seen) {
         seen = version;
-        renderer.set_points(points, point_colors);
         l = lines(track.size(), pose);
         current = pose;
         for (int i = 0; i < 2; ++i) {
@@ -237,21 +281,22 @@ void RunViewer::Impl::render_window(GlContext& context, MeshRenderer& renderer) 
       }
       if (final_mesh && !mesh_loaded) {
         renderer.set_mesh(*final_mesh);
-        renderer.set_points({}, {});
+        renderer.set_backdrop({}, {});
+        shown.reset();
         mesh_loaded = true;
         glfwSetWindowTitle(window, (status + "  [run finished: final mesh; close the window to exit]").c_str());
       }
     }
     if (controller.follow() && current) controller.reset(*current);
-    int fw = 0, fh = 0;
-    glfwGetFramebufferSize(window, &fw, &fh);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glViewport(0, 0, fw, fh);
     glClearColor(0.08f, 0.08f, 0.1f, 1);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    const int vw = fw * kViewW / kWindowW;
     glViewport(0, 0, vw, fh);
-    renderer.draw(view_camera(vw, fh), controller.T_world_view(), l, true);
+    // The lines from the pose the model view was rendered at, so they sit on its surfaces; the view follows the
+    // mouse with the next model view (at most 1 / kModelViewHz later).
+    if (shown) renderer.draw(shown->first, shown->second, l, true);
+    else renderer.draw(view_camera(vw, fh), controller.T_world_view(), l, true);
     glDisable(GL_DEPTH_TEST);
     glUseProgram(quad);
     glBindVertexArray(vao);
@@ -295,45 +340,67 @@ RunViewer::~RunViewer() {
 
 ViewController& RunViewer::controller() { return impl_->controller; }
 
-void RunViewer::observe(const RgbdFrame& frame, const slam::FrameResult& r, size_t blocks, size_t memory_bytes) {
-  Impl& m = *impl_;
-  std::vector<Eigen::Vector3f> new_points;
-  std::vector<Rgb8> new_colors;
-  if (r.integrated) {
-    const PinholeCamera& c = m.camera;
-    for (int y = kPointStride / 2; y < frame.depth.height(); y += kPointStride)
-      for (int x = kPointStride / 2; x < frame.depth.width(); x += kPointStride) {
-        const float d = frame.depth(x, y);
-        if (!(d > 0)) continue;
-        new_points.push_back((r.T_world_camera * c.backproject(x, y, d)).cast<float>());
-        new_colors.push_back(frame.color(x, y));
-      }
+void RunViewer::Impl::serve_model_view(const fusion::VoxelBlockGrid& map) {
+  std::pair<PinholeCamera, SE3> want;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!request || !options.window) return;
+    const auto now = std::chrono::steady_clock::now();
+    // At most kModelViewHz, and the raycasts at most kModelViewShare of the tracking thread's time.
+    const double wait_s = std::max(1.0 / kModelViewHz, last_model_s / kModelViewShare);
+    if (now - last_model < std::chrono::duration<double>(wait_s)) return;
+    // Nothing new to show: the map is as it was and the view has not moved.
+    if (!map_changed && model && same_view(model->camera, model->T_world_view, request->first, request->second))
+      return;
+    want = *request;
+    last_model = now;
+    map_changed = false;
   }
+  const auto start = std::chrono::steady_clock::now();
+  ModelView v = render_model(map, want.first, want.second);
+  std::lock_guard<std::mutex> lock(mutex);
+  last_model_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  model = std::move(v);
+  ++model_version;
+}
+
+void RunViewer::observe(const RgbdFrame& frame, const slam::FrameResult& r, const fusion::VoxelBlockGrid& map) {
+  Impl& m = *impl_;
   std::ostringstream status;
   status << std::fixed << std::setprecision(1) << "hashfusion  frame " << r.index << "  " << slam::to_string(r.state)
          << "  " << (r.ms.total() > 0 ? 1000.0 / r.ms.total() : 0.0) << " fps (track " << r.ms.track
-         << " ms, integrate " << r.ms.integrate << " ms, raycast " << r.ms.raycast << " ms)  " << blocks
-         << " blocks  " << double(memory_bytes) / (1 << 20) << " MiB";
+         << " ms, integrate " << r.ms.integrate << " ms, raycast " << r.ms.raycast << " ms)  " << map.block_count()
+         << " blocks  " << double(map.memory_bytes()) / (1 << 20) << " MiB";
+  const bool shot = !m.options.window && m.options.screenshot_every > 0 && !m.options.screenshot.empty() &&
+                    long(r.index) % m.options.screenshot_every == 0;
+  std::optional<ModelView> shot_view;
+  if (shot) {
+    ViewController follow;
+    follow.reset(r.T_world_camera);
+    shot_view = render_model(map, m.camera, follow.T_world_view());
+  }
   {
     std::lock_guard<std::mutex> lock(m.mutex);
     m.color = frame.color;
     m.depth = frame.depth;
-    if (m.points.size() + new_points.size() <= kMaxPoints) {
-      m.points.insert(m.points.end(), new_points.begin(), new_points.end());
-      m.point_colors.insert(m.point_colors.end(), new_colors.begin(), new_colors.end());
-    }
     const Eigen::Vector3f at = r.T_world_camera.translation().cast<float>();
     if (r.pose_valid) m.track.push_back(at);
     else if (!m.track.empty()) m.lost_marks.push_back(at);
     if (r.pose_valid) m.pose = r.T_world_camera;
     m.status = status.str();
+    m.map_changed = true;
     ++m.version;
-    if (!m.options.window && m.options.screenshot_every > 0 && long(r.index) % m.options.screenshot_every == 0 &&
-        !m.options.screenshot.empty())
-      m.shots.push_back({numbered_screenshot(m.options.screenshot, long(r.index)), r.T_world_camera, m.points.size(),
-                         m.track.size()});
+    if (shot_view)
+      m.shots.push_back({numbered_screenshot(m.options.screenshot, long(r.index)), m.track.size(), r.T_world_camera,
+                         std::move(*shot_view)});
   }
   m.changed.notify_all();
+  m.serve_model_view(map);
+}
+
+void RunViewer::hold(const fusion::VoxelBlockGrid& map) {
+  while (!impl_->controller.wait_for_turn_for(std::chrono::milliseconds(int(1000.0 / kModelViewHz))))
+    impl_->serve_model_view(map);
 }
 
 void RunViewer::finish(const TriangleMesh& mesh, const SE3& T_world_camera) {

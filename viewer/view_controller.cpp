@@ -71,9 +71,16 @@ SE3 ViewController::T_world_view() const {
 }
 
 void ViewController::wait_for_turn() {
+  while (!wait_for_turn_for(std::chrono::hours(1))) {
+  }
+}
+
+bool ViewController::wait_for_turn_for(std::chrono::milliseconds timeout) {
   std::unique_lock<std::mutex> lock(mutex_);
-  changed_.wait(lock, [this] { return !paused_ || steps_ > 0 || quit_.load() || released_; });
+  if (!changed_.wait_for(lock, timeout, [this] { return !paused_ || steps_ > 0 || quit_.load() || released_; }))
+    return false;
   if (paused_ && steps_ > 0) --steps_;
+  return true;
 }
 
 bool ViewController::paused() const {

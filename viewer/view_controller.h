@@ -12,6 +12,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <mutex>
 
@@ -33,6 +34,9 @@ class ViewController {
   // Tracking thread, after each frame: blocks while paused (until resumed, a step, quit or release()), so pausing
   // holds the run where the user asked; otherwise returns at once.
   void wait_for_turn();
+  // The same for at most `timeout`: true when the run may go on, false when it is still held (the caller does
+  // something else, e.g. renders for a paused run's window, and asks again).
+  bool wait_for_turn_for(std::chrono::milliseconds timeout);
   bool paused() const;
   bool take_save_request();  // true once per 's'
   const std::atomic<bool>* quit_flag() const { return &quit_; }

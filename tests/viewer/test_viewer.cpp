@@ -157,3 +157,69 @@ TEST(Viewer, GlRenderOfTheMeshMatchesTheCpuRaycast) {
     hf::write_color_png(std::string(dir) + "/cpu.png", cpu);
   }
 }
+
+// What `run --screenshot-every` writes (and the live window's model view shows): the model raycast from the
+// following free camera, with the frustum drawn over it. The raycast is the CPU one, shown texel for texel, so the
+// screenshot equals fusion::raycast of the same map from the same view (model_view_options()) at every pixel no
+// line covers; the lines cover at most one pixel per step of their longer image axis plus one per segment.
+TEST(Viewer, ScreenshotIsTheModelRaycastWithTheFrustum) {
+  hf::PinholeCamera camera;
+  camera.width = 320;
+  camera.height = 240;
+  camera.fx = camera.fy = 260.0;
+  camera.cx = 159.5;
+  camera.cy = 119.5;
+  const Eigen::Vector3d centre(0.1, -0.05, 1.2);
+  const hf::fusion::VoxelBlockGrid grid = fused_sphere(camera, centre);
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  T.block<3, 1>(0, 3) = centre + Eigen::Vector3d(0.0, 0.0, -1.2);
+  const hf::SE3 pose = hf::SE3::from_matrix(T);
+  const std::string path = ::testing::TempDir() + "/viewer_model_view.png";
+  hf::viewer::RunViewerOptions options;
+  options.window = false;
+  options.screenshot = path;
+  options.screenshot_every = 1;
+  std::unique_ptr<hf::viewer::RunViewer> viewer;
+  try {
+    viewer = std::make_unique<hf::viewer::RunViewer>(camera, options);
+  } catch (const hf::Error& e) {
+    GTEST_SKIP() << "no display or EGL for OpenGL: " << e.what();
+  }
+  hf::RgbdFrame frame;
+  frame.depth = hf::DepthImage(camera.width, camera.height);
+  frame.color = hf::ColorImage(camera.width, camera.height);
+  hf::slam::FrameResult r;
+  r.state = hf::slam::TrackState::tracked;
+  r.pose_valid = r.integrated = true;
+  r.T_world_camera = pose;
+  viewer->observe(frame, r, grid);
+  viewer->finish(hf::fusion::extract_mesh(grid), pose);
+  const hf::ColorImage shot = hf::load_color(hf::viewer::numbered_screenshot(path, 0));
+
+  hf::viewer::ViewController follow;
+  follow.reset(pose);
+  const hf::SE3 T_world_view = follow.T_world_view();
+  const hf::fusion::RaycastResult cpu = hf::fusion::raycast(grid, camera, T_world_view, hf::viewer::model_view_options());
+  ASSERT_EQ(shot.width(), cpu.shaded.width());
+  ASSERT_GT(cpu.hit_count, 3000) << "the sphere should fill a good part of the view";
+  // The frustum's pixels: each segment's projection in the view (both ends lie in front of it).
+  const hf::viewer::Polyline frustum = hf::viewer::camera_frustum(camera, pose, 0.2, {240, 220, 40});
+  double line_px = 0.0;
+  for (size_t i = 0; i + 1 < frustum.points_world.size(); i += 2) {
+    const Eigen::Vector3d a = T_world_view.inverse() * frustum.points_world[i].cast<double>();
+    const Eigen::Vector3d b = T_world_view.inverse() * frustum.points_world[i + 1].cast<double>();
+    ASSERT_GT(std::min(a.z(), b.z()), 0.1);
+    const Eigen::Vector2d d = camera.project(a) - camera.project(b);
+    line_px += std::ceil(d.cwiseAbs().maxCoeff()) + 1.0;
+  }
+  size_t differ = 0, yellow = 0;
+  for (size_t i = 0; i < shot.size(); ++i) {
+    const hf::Rgb8 s = shot.pixels()[i], c = cpu.shaded.pixels()[i];
+    differ += s.r != c.r || s.g != c.g || s.b != c.b;
+    yellow += s.r == 240 && s.g == 220 && s.b == 40;
+  }
+  EXPECT_LE(double(differ), line_px) << "pixels off the lines differ from the CPU raycast";
+  EXPECT_GE(double(yellow), 0.5 * line_px) << "the frustum is not drawn";
+  std::cout << "model view: " << cpu.hit_count << " surface pixels, " << differ << " differ from the CPU raycast, "
+            << yellow << " frustum pixels (bound " << line_px << ")\n";
+}
