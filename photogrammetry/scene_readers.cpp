@@ -10,6 +10,7 @@
 #include "io/ply.h"
 #include "io/trajectory_io.h"
 #include "io/tum_dataset.h"
+#include "photogrammetry/scene_mvs.h"
 #include "photogrammetry/text_lines.h"
 
 namespace hf::photogrammetry {
@@ -277,17 +278,19 @@ Network read_network(const std::string& path, const RunShotsOptions& run_options
   if (fs::is_directory(path, ec)) {
     if (regular_file(joined(path, "report.json"))) return read_run_network(path, run_options);
     if (regular_file(joined(path, "cameras_from_scene_mvs.txt"))) return read_openmvs_text(path);
+    if (regular_file(joined(path, "scene.mvs"))) return read_scene_mvs(joined(path, "scene.mvs"));
     for (const auto& e : fs::directory_iterator(path, ec)) {
       const std::string name = e.path().filename().string();
       if (name.size() > 8 && name.compare(name.size() - 8, 8, "_par.txt") == 0) return read_middlebury(path);
     }
     throw Error(path + ": expected a hashfusion run folder (report.json), an OpenMVS dump "
-                       "(cameras_from_scene_mvs.txt) or a Middlebury folder (*_par.txt)");
+                       "(cameras_from_scene_mvs.txt) or scene (scene.mvs), or a Middlebury folder (*_par.txt)");
   }
   if (!regular_file(path)) throw Error(path + ": no such shots file or folder");
   const std::string name = fs::path(path).filename().string();
   if (name.size() > 8 && name.compare(name.size() - 8, 8, "_par.txt") == 0) return read_middlebury(path);
   if (name == "report.json") return read_run_network(fs::path(path).parent_path().string(), run_options);
+  if (name.size() > 4 && name.compare(name.size() - 4, 4, ".mvs") == 0) return read_scene_mvs(path);
   return read_openmvs_text(path);
 }
 

@@ -62,7 +62,8 @@ struct RunReport {
 RunReport parse_run_report(const std::string& text, const std::string& name_for_errors);
 Network read_run_network(const std::string& run_dir, const RunShotsOptions& options = {});
 
-// Any of the above by what `path` holds: a run folder (report.json), an OpenMVS dump, a Middlebury *_par.txt.
+// Any of the above by what `path` holds: a run folder (report.json), an OpenMVS dump, an OpenMVS scene.mvs
+// (photogrammetry/scene_mvs.h; a folder with scene.mvs and no dump too), a Middlebury *_par.txt.
 // Throws hf::Error naming `path` when it is none of them.
 Network read_network(const std::string& path, const RunShotsOptions& run_options = {});
 

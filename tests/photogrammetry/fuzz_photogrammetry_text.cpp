@@ -1,5 +1,5 @@
-// Fuzzes every photogrammetry text parser (photogrammetry/scene_readers.h, photogrammetry/sketch.h): any bytes
-// either parse into values that pass Network::validate() / the sketch's documented invariants, or raise hf::Error
+// Fuzzes every photogrammetry parser (photogrammetry/scene_readers.h, photogrammetry/sketch.h and the binary
+// scene.mvs of photogrammetry/scene_mvs.h): any bytes either parse into values that pass Network::validate() / the sketch's documented invariants, or raise hf::Error
 // with a one-line printable message naming the file (tests/io/fuzz_message_check.h).
 #include <cmath>
 #include <cstddef>
@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "photogrammetry/scene_mvs.h"
 #include "photogrammetry/scene_readers.h"
 #include "photogrammetry/sketch.h"
 #include "tests/io/fuzz_message_check.h"
@@ -42,6 +43,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     n.source = f;
     n.shots = pg::parse_middlebury_par(text, f, "/nonexistent");
     n.validate();
+  });
+  guarded("scene.mvs", [&](const std::string& f) {
+    const pg::Network n = pg::parse_scene_mvs(text, f, "/nonexistent");  // validated inside
+    for (const auto& v : n.cloud.views)
+      for (const int s : v)
+        if (s < 0 || size_t(s) >= n.shots.size()) std::abort();
+    for (const auto& p : n.cloud.positions)
+      if (!p.allFinite()) std::abort();
+    if (!n.cloud.colors.empty() && n.cloud.colors.size() != n.cloud.size()) std::abort();
   });
   guarded("report.json", [&](const std::string& f) {
     const pg::RunReport r = pg::parse_run_report(text, f);

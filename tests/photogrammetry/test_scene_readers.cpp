@@ -2,6 +2,7 @@
 // exactly, malformed ones fail with one line naming file and line; the two shared data sets read as documented.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <unistd.h>
@@ -10,6 +11,7 @@
 #include "io/image_io.h"
 #include "io/ply.h"
 #include "io/trajectory_io.h"
+#include "photogrammetry/scene_mvs.h"
 #include "photogrammetry/scene_readers.h"
 #include "photogrammetry/sketch.h"
 #include "tests/photogrammetry/synthetic_shots.h"
@@ -233,6 +235,133 @@ TEST(SharedData, MiddleburyReads47CamerasOf19Images) {
     ASSERT_TRUE(uv) << shot.name;
     EXPECT_TRUE(shot.in_image(*uv)) << shot.name;
   }
+}
+
+// scene.mvs bytes as OpenMVS's serialiser writes them (photogrammetry/scene_mvs.h).
+struct MvsBytes {
+  std::string b;
+  template <class T>
+  MvsBytes& put(T v) {
+    b.append(reinterpret_cast<const char*>(&v), sizeof v);
+    return *this;
+  }
+  MvsBytes& str(const std::string& s) {
+    put(std::uint64_t(s.size()));
+    b += s;
+    return *this;
+  }
+  MvsBytes& mat(const Eigen::Matrix3d& M) {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) put(M(r, c));
+    return *this;
+  }
+  MvsBytes& vec(const Eigen::Vector3d& v) { return put(v.x()).put(v.y()).put(v.z()); }
+};
+
+Eigen::Matrix3d rotation(double angle, const Eigen::Vector3d& axis) {
+  return Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+}
+
+// Version 3: one platform whose camera is mounted rotated and offset, two poses; image b has no pose.
+std::string small_scene(std::uint32_t width = 640, std::uint32_t version = 3) {
+  MvsBytes m;
+  m.b = "MVSI";
+  m.put(version).put(std::uint32_t(0));
+  Eigen::Matrix3d K;
+  K << 500, 0, 319.5, 0, 510, 239.5, 0, 0, 1;
+  m.put(std::uint64_t(1)).str("platform0").put(std::uint64_t(1)).str("cam");
+  if (version >= 4) m.str("RGB");
+  m.put(width).put(std::uint32_t(480)).mat(K).mat(rotation(0.05, {0, 0, 1})).vec({0.1, 0, 0});
+  m.put(std::uint64_t(2)).mat(Eigen::Matrix3d::Identity()).vec({0, 0, -5});
+  m.mat(rotation(0.2, {0, 1, 0})).vec({1, 0, -5});
+  m.put(std::uint64_t(3));
+  const auto image = [&](const std::string& name, std::uint32_t pose, std::uint32_t id) {
+    m.str(name);
+    if (version >= 5) m.str("");
+    m.put(std::uint32_t(0)).put(std::uint32_t(0)).put(pose);
+    if (version >= 3) m.put(id);
+    if (version >= 7) m.put(0.f).put(0.f).put(0.f).put(std::uint64_t(0));
+  };
+  image("images/a.jpg", 0, 0);
+  image("images/b.jpg", 0xFFFFFFFFu, 1);
+  image("images/c.jpg", 1, 2);
+  m.put(std::uint64_t(2));
+  m.put(0.f).put(0.f).put(0.f).put(std::uint64_t(2)).put(std::uint32_t(0)).put(1.f).put(std::uint32_t(2)).put(0.5f);
+  m.put(0.5f).put(-0.25f).put(1.f).put(std::uint64_t(1)).put(std::uint32_t(1)).put(0.f);
+  m.put(std::uint64_t(0));                                                       // normals
+  m.put(std::uint64_t(2)).put(std::uint8_t(10)).put(std::uint8_t(20)).put(std::uint8_t(30));  // B, G, R
+  m.put(std::uint8_t(40)).put(std::uint8_t(50)).put(std::uint8_t(60));
+  m.put(std::uint64_t(0)).put(std::uint64_t(0)).put(std::uint64_t(0));           // lines
+  for (int k = 0; k < 16; ++k) m.put(k % 5 == 0 ? 1.0 : 0.0);                   // transform
+  if (version >= 6)
+    for (int k = 0; k < 15; ++k) m.put(0.0);
+  return m.b;
+}
+
+TEST(SceneMvs, ComposesEachImagesCameraFromItsPlatformAndDropsUnposedImages) {
+  for (const std::uint32_t version : {3u, 7u}) {
+    const Network n = parse_scene_mvs(small_scene(640, version), "s.mvs", "/root");
+    ASSERT_EQ(n.shots.size(), 2u) << "image b has no pose";
+    EXPECT_EQ(n.shots[0].name, "a.jpg");
+    EXPECT_EQ(n.shots[1].name, "c.jpg");
+    EXPECT_EQ(n.shots[1].image_path, "/root/images/c.jpg");
+    EXPECT_EQ(n.shots[0].width, 640);
+    EXPECT_EQ(n.shots[0].K(1, 1), 510);
+    // x_cam = R_c (R_p (X - C_p) - C_c): R = R_c R_p, C = R_p^T C_c + C_p.
+    const Eigen::Matrix3d Rc = rotation(0.05, {0, 0, 1}), Rp = rotation(0.2, {0, 1, 0});
+    EXPECT_LT((n.shots[1].R_camera_world - Rc * Rp).norm(), 1e-15);
+    EXPECT_LT((n.shots[1].C_world - (Rp.transpose() * Eigen::Vector3d(0.1, 0, 0) + Eigen::Vector3d(1, 0, -5))).norm(),
+              1e-15);
+    ASSERT_EQ(n.cloud.size(), 2u);
+    EXPECT_EQ(n.cloud.positions[1], Eigen::Vector3d(0.5, -0.25, 1.0));
+    EXPECT_EQ(n.cloud.views[0], (std::vector<int>{0, 1}));  // images 0 and 2 are shots 0 and 1
+    EXPECT_TRUE(n.cloud.views[1].empty());                   // its one view was the unposed image
+    EXPECT_EQ(n.cloud.colors[0], (Rgb8{30, 20, 10}));
+  }
+}
+
+TEST(SceneMvs, MalformedScenesFailWithTheByteNeverACrash) {
+  const std::string good = small_scene();
+  for (size_t n = 0; n < good.size(); ++n) {  // every truncation
+    const std::string e = error_of([&] { parse_scene_mvs(good.substr(0, n), "s.mvs", "."); });
+    EXPECT_EQ(e.rfind("s.mvs: at byte ", 0), 0u) << n << ": " << e;
+  }
+  EXPECT_EQ(error_of([&] { parse_scene_mvs(good + "x", "s.mvs", "."); }),
+            "s.mvs: at byte " + std::to_string(good.size()) + ": expected the end of the scene, got 1 more bytes");
+  EXPECT_EQ(error_of([] { parse_scene_mvs(small_scene(640, 8), "s.mvs", "."); }),
+            "s.mvs: at byte 8: expected a scene version up to 7, got 8");
+  EXPECT_NE(error_of([] { parse_scene_mvs(small_scene(0), "s.mvs", "."); }).find("normalised K"), std::string::npos);
+  std::string huge = good;  // the platform count: far more than the bytes could hold
+  const std::uint64_t count = 1ull << 40;
+  std::memcpy(&huge[12], &count, 8);
+  EXPECT_NE(error_of([&] { parse_scene_mvs(huge, "s.mvs", "."); }).find("expected a platform count of at most"),
+            std::string::npos);
+}
+
+TEST(SharedData, SceauxSceneMvsEqualsItsTextDump) {
+  const std::string dir = kShared + "/data/photogrammetry_sceaux_castle";
+  if (!std::filesystem::exists(dir)) GTEST_SKIP() << dir << " not found (../shared absent)";
+  const Network binary = read_scene_mvs(dir + "/scene.mvs");
+  const Network text = read_openmvs_text(dir);
+  ASSERT_EQ(binary.shots.size(), text.shots.size());
+  for (size_t s = 0; s < text.shots.size(); ++s) {
+    EXPECT_EQ(binary.shots[s].name, text.shots[s].name);
+    EXPECT_EQ(binary.shots[s].image_available, text.shots[s].image_available) << binary.shots[s].name;
+    EXPECT_EQ(binary.shots[s].width, text.shots[s].width);
+    // The dump prints doubles with enough digits for 1e-9 relative.
+    EXPECT_LT((binary.shots[s].K - text.shots[s].K).norm(), 1e-9 * text.shots[s].K.norm());
+    EXPECT_LT((binary.shots[s].R_camera_world - text.shots[s].R_camera_world).norm(), 1e-9);
+    EXPECT_LT((binary.shots[s].C_world - text.shots[s].C_world).norm(), 1e-9 * (1 + text.shots[s].C_world.norm()));
+  }
+  ASSERT_EQ(binary.cloud.size(), text.cloud.size());
+  double worst = 0.0;
+  for (size_t i = 0; i < text.cloud.size(); ++i) {
+    worst = std::max(worst, (binary.cloud.positions[i] - text.cloud.positions[i]).norm() /
+                                (1.0 + text.cloud.positions[i].norm()));
+    ASSERT_EQ(binary.cloud.views[i], text.cloud.views[i]) << "point " << i;
+    ASSERT_EQ(binary.cloud.colors[i], text.cloud.colors[i]) << "point " << i;
+  }
+  EXPECT_LT(worst, 1e-6);  // float coordinates printed in decimal
 }
 
 }  // namespace

@@ -1,0 +1,425 @@
+#include "fusion/opencl/device_voxel_grid.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <chrono>
+#include <cstring>
+#include <sstream>
+#include <string_view>
+#include <vector>
+
+#include "registration/opencl/opencl_context.h"
+
+namespace hf::opencl {
+// fusion/opencl/integrate.cl with the shared headers inlined (embed_opencl.cmake, fusion/opencl/CMakeLists.txt).
+std::string_view fusion_program_source();
+}  // namespace hf::opencl
+
+namespace hf::fusion {
+
+namespace {
+
+// integrate.cl's counter indices and error bits.
+enum Counter : int {
+  kPoolNext = 0, kEmitted = 1, kMissing = 2, kVisible = 3, kError = 4, kUpdated = 5, kPixels = 6, kCreated = 7,
+  kInView = 8, kErrorKey = 9, kCounters = 16
+};
+constexpr std::uint32_t kErrorPool = 1, kErrorProbe = 2, kErrorList = 4;
+constexpr int kFrameConstants = 34;  // HF_F_COUNT
+constexpr size_t kUpdateGroup = 64;  // work-items per group of hf_fusion_update (divides 512)
+
+struct Entry {
+  std::int32_t x, y, z;
+  std::uint32_t value;
+};
+static_assert(sizeof(Entry) == 16, "hf_block_entry");
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+size_t round_up(size_t n, size_t m) { return (n + m - 1) / m * m; }
+
+}  // namespace
+
+struct DeviceVoxelGrid::Impl {
+  std::shared_ptr<opencl::Context> ctx;
+  DeviceGridOptions options;
+  bool fp64 = false;
+  cl::Kernel bands, find, create, block_frames, incidence, update, gather;
+  size_t entries = 0;
+  int shift = 0;
+  cl::Buffer table, stamps, pool, visible, frames, counters, constants;
+  // Per frame size: the images and the key lists.
+  cl::Buffer depth, rgb, incidence_map, list, missing;
+  cl::Buffer staging, staging_entries;  // hf_gather_blocks' output, staging_blocks blocks
+  size_t staging_blocks = 0;
+  size_t pixels = 0, list_capacity = 0;
+  std::uint32_t pool_next = 0, frame_stamp = 0, last_visible = 0;
+
+  std::string where() const { return "integrate on " + ctx->info().platform_name + " / " + ctx->info().device_name; }
+
+  std::array<std::uint32_t, kCounters> read_counters() {
+    std::array<std::uint32_t, kCounters> c{};
+    ctx->queue().enqueueReadBuffer(counters, CL_TRUE, 0, sizeof(c), c.data());
+    return c;
+  }
+
+  void ensure_frame_buffers(size_t n_pixels, double truncation_vox) {
+    if (n_pixels <= pixels) return;
+    const cl::Context& c = ctx->context();
+    depth = cl::Buffer(c, CL_MEM_READ_ONLY, n_pixels * sizeof(float));
+    rgb = cl::Buffer(c, CL_MEM_READ_ONLY, n_pixels * 3);
+    incidence_map = cl::Buffer(c, CL_MEM_READ_WRITE, n_pixels * sizeof(float));
+    // A ray's band spans 2 mu = truncation_vox / 4 blocks, so it crosses at most ceil(that) + 1 cells per axis and
+    // its walk takes at most their sum + 1 steps: the list holds every pixel's worst case.
+    const size_t per_pixel = 3 * (size_t(std::ceil(truncation_vox / 4.0)) + 1) + 1;
+    list_capacity = n_pixels * per_pixel;
+    list = cl::Buffer(c, CL_MEM_READ_WRITE, list_capacity * sizeof(std::uint64_t));
+    missing = cl::Buffer(c, CL_MEM_READ_WRITE, list_capacity * sizeof(std::uint32_t));
+    pixels = n_pixels;
+  }
+
+  // Copies blocks into grid: wanted[i]'s voxels are voxels[i * 512, (i + 1) * 512).
+  static size_t copy_into(VoxelBlockGrid& grid, const std::vector<Entry>& wanted, const std::vector<Voxel>& voxels) {
+    std::vector<size_t> order(wanted.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](size_t i, size_t j) {
+      const Entry &a = wanted[i], &b = wanted[j];
+      if (a.z != b.z) return a.z < b.z;
+      if (a.y != b.y) return a.y < b.y;
+      return a.x < b.x;
+    });
+    for (size_t i : order) {
+      const Entry& e = wanted[i];
+      std::uint8_t* flag = nullptr;
+      VoxelBlock* block = grid.allocate({e.x, e.y, e.z}, nullptr, &flag);
+      std::memcpy(block->voxels.data(), voxels.data() + i * HF_VOXELS_PER_BLOCK, sizeof(VoxelBlock));
+      *flag = block_is_surface_free(*block) ? 1 : 0;
+    }
+    return order.size();
+  }
+
+};
+
+DeviceVoxelGrid::DeviceVoxelGrid(const VolumeParams& params, std::shared_ptr<opencl::Context> context,
+                                 const DeviceGridOptions& options)
+    : params_(params), impl_(std::make_unique<Impl>()) {
+  params_.validate();
+  if (options.max_probe < 1) throw Error("DeviceGridOptions::max_probe must be >= 1, got " +
+                                         std::to_string(options.max_probe));
+  Impl& m = *impl_;
+  m.options = options;
+  m.ctx = context ? std::move(context) : opencl::Context::shared();
+  try {
+    const cl::Device& device = m.ctx->device();
+    const size_t pool_bytes = params_.capacity_blocks * sizeof(VoxelBlock);
+    m.entries = std::bit_ceil(std::max<size_t>(16, 2 * params_.capacity_blocks));
+    m.shift = 64 - std::countr_zero(m.entries);
+    const cl_ulong max_alloc = device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
+    const cl_ulong global = device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
+    const size_t table_bytes = m.entries * (sizeof(Entry) + sizeof(std::uint32_t));
+    if (pool_bytes > max_alloc || pool_bytes + table_bytes > global) {
+      std::ostringstream msg;
+      msg << m.where() << ": a pool of " << params_.capacity_blocks << " blocks (" << pool_bytes / (1024 * 1024)
+          << " MiB) does not fit the device (largest allocation " << max_alloc / (1024 * 1024) << " MiB, memory "
+          << global / (1024 * 1024) << " MiB); lower VolumeParams::capacity_blocks (--capacity-blocks)";
+      throw DeviceMemoryError(msg.str());
+    }
+    m.fp64 = m.ctx->info().has_fp64;
+    std::string build = "-cl-fp32-correctly-rounded-divide-sqrt";
+    if (m.fp64) build += " -DHF_FP64=1";
+    cl::Program program =
+        m.ctx->program(m.fp64 ? "fusion-fp64" : "fusion-fp32", opencl::fusion_program_source(), build);
+    m.bands = cl::Kernel(program, "hf_fusion_bands");
+    m.find = cl::Kernel(program, "hf_fusion_find");
+    m.create = cl::Kernel(program, "hf_fusion_create");
+    m.block_frames = cl::Kernel(program, "hf_fusion_block_frames");
+    m.incidence = cl::Kernel(program, "hf_point_to_plane");
+    m.update = cl::Kernel(program, "hf_fusion_update");
+    m.gather = cl::Kernel(program, "hf_gather_blocks");
+    const cl::Context& c = m.ctx->context();
+    m.table = cl::Buffer(c, CL_MEM_READ_WRITE, m.entries * sizeof(Entry));
+    m.stamps = cl::Buffer(c, CL_MEM_READ_WRITE, m.entries * sizeof(std::uint32_t));
+    m.pool = cl::Buffer(c, CL_MEM_READ_WRITE, pool_bytes);
+    m.visible = cl::Buffer(c, CL_MEM_READ_WRITE, params_.capacity_blocks * sizeof(std::uint32_t));
+    m.frames = cl::Buffer(c, CL_MEM_READ_WRITE, params_.capacity_blocks * 4 * sizeof(float));
+    m.counters = cl::Buffer(c, CL_MEM_READ_WRITE, kCounters * sizeof(std::uint32_t));
+    m.constants = cl::Buffer(c, CL_MEM_READ_ONLY, kFrameConstants * (m.fp64 ? sizeof(double) : sizeof(float)));
+  } catch (const Error&) {
+    throw;
+  } catch (...) {
+    opencl::rethrow_as_hf_error(m.where());
+  }
+  clear();
+}
+
+DeviceVoxelGrid::~DeviceVoxelGrid() = default;
+
+std::string DeviceVoxelGrid::device_name() const {
+  return impl_->ctx->info().platform_name + " / " + impl_->ctx->info().device_name;
+}
+
+void DeviceVoxelGrid::clear() {
+  Impl& m = *impl_;
+  try {
+    cl::CommandQueue& q = m.ctx->queue();
+    q.enqueueFillBuffer(m.table, std::uint32_t(0), 0, m.entries * sizeof(Entry));
+    q.enqueueFillBuffer(m.stamps, std::uint32_t(0), 0, m.entries * sizeof(std::uint32_t));
+    // A block is zero (unobserved) when it is created: slots are handed out once, from a cleared pool.
+    q.enqueueFillBuffer(m.pool, std::uint32_t(0), 0, params_.capacity_blocks * sizeof(VoxelBlock));
+    q.finish();
+  } catch (...) {
+    opencl::rethrow_as_hf_error(m.where());
+  }
+  m.pool_next = 0;
+  m.frame_stamp = 0;
+  m.last_visible = 0;
+}
+
+size_t DeviceVoxelGrid::block_count() const { return impl_->pool_next; }
+
+IntegrateStats DeviceVoxelGrid::integrate(const DepthImage& depth, const ColorImage& colour,
+                                          const PinholeCamera& camera, const SE3& T_world_camera,
+                                          const IntegrateParams& params) {
+  detail::check_frame_sizes(depth, colour, camera);
+  Impl& m = *impl_;
+  IntegrateStats stats;
+  m.last_visible = 0;
+  const size_t n_pixels = size_t(depth.width()) * size_t(depth.height());
+  if (n_pixels == 0) {
+    stats.blocks_total = m.pool_next;
+    return stats;
+  }
+  std::array<std::uint32_t, kCounters> c{};
+  try {
+    cl::CommandQueue& q = m.ctx->queue();
+    auto t0 = std::chrono::steady_clock::now();
+    m.ensure_frame_buffers(n_pixels, params_.truncation_vox);
+    // The frame's constants in integrate.cl's order, in the device's real type.
+    const Eigen::Matrix3d R_wc = T_world_camera.rotation();
+    const Eigen::Vector3d t_wc = T_world_camera.translation();
+    const SE3 T_camera_world = T_world_camera.inverse();
+    const Eigen::Matrix3d R_cw = T_camera_world.rotation();
+    const Eigen::Vector3d t_cw = T_camera_world.translation();
+    std::array<double, kFrameConstants> f{};
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        f[size_t(3 * i + j)] = R_wc(i, j);
+        f[size_t(20 + 3 * i + j)] = R_cw(i, j);
+      }
+      f[size_t(9 + i)] = t_wc[i];
+      f[size_t(29 + i)] = t_cw[i];
+    }
+    f[12] = 1.0 / params_.block_m();
+    f[13] = params_.truncation_m();
+    f[14] = params.min_depth_m;
+    f[15] = params.max_depth_m;
+    f[16] = camera.fx, f[17] = camera.fy, f[18] = camera.cx, f[19] = camera.cy;
+    f[32] = params_.voxel_m;
+    f[33] = params_.block_m();
+    if (m.fp64) {
+      q.enqueueWriteBuffer(m.constants, CL_FALSE, 0, sizeof(f), f.data());
+    } else {
+      std::array<float, kFrameConstants> f32{};
+      for (size_t i = 0; i < f.size(); ++i) f32[i] = float(f[i]);
+      q.enqueueWriteBuffer(m.constants, CL_TRUE, 0, sizeof(f32), f32.data());
+    }
+    q.enqueueWriteBuffer(m.depth, CL_FALSE, 0, n_pixels * sizeof(float), depth.data());
+    c[kPoolNext] = m.pool_next;
+    q.enqueueWriteBuffer(m.counters, CL_FALSE, 0, sizeof(c), c.data());
+    ++m.frame_stamp;
+
+    // Phase 1: bands, look-up, creation.
+    const int W = depth.width(), H = depth.height();
+    m.bands.setArg(0, m.depth);
+    m.bands.setArg(1, W);
+    m.bands.setArg(2, H);
+    m.bands.setArg(3, m.constants);
+    m.bands.setArg(4, m.list);
+    m.bands.setArg(5, cl_uint(m.list_capacity));
+    m.bands.setArg(6, m.counters);
+    q.enqueueNDRangeKernel(m.bands, cl::NullRange, cl::NDRange(size_t(W), size_t(H)));
+    c = m.read_counters();
+    if (c[kError] & kErrorList) throw Error(m.where() + ": the frame's block list overflowed (internal error)");
+    const cl_uint emitted = c[kEmitted];
+    stats.pixels_used = c[kPixels];
+    if (emitted > 0) {
+      const cl_uint mask = cl_uint(m.entries - 1);
+      m.find.setArg(0, m.list);
+      m.find.setArg(1, emitted);
+      m.find.setArg(2, m.table);
+      m.find.setArg(3, mask);
+      m.find.setArg(4, m.shift);
+      m.find.setArg(5, m.options.max_probe);
+      m.find.setArg(6, m.stamps);
+      m.find.setArg(7, cl_uint(m.frame_stamp));
+      m.find.setArg(8, m.visible);
+      m.find.setArg(9, m.missing);
+      m.find.setArg(10, m.counters);
+      q.enqueueNDRangeKernel(m.find, cl::NullRange, cl::NDRange(size_t(emitted)));
+      m.create.setArg(0, m.list);
+      m.create.setArg(1, m.missing);
+      m.create.setArg(2, m.table);
+      m.create.setArg(3, mask);
+      m.create.setArg(4, m.shift);
+      m.create.setArg(5, m.options.max_probe);
+      m.create.setArg(6, m.stamps);
+      m.create.setArg(7, cl_uint(m.frame_stamp));
+      m.create.setArg(8, m.visible);
+      m.create.setArg(9, cl_uint(params_.capacity_blocks));
+      m.create.setArg(10, m.counters);
+      q.enqueueNDRangeKernel(m.create, cl::NullRange, cl::NDRange(1));
+      c = m.read_counters();
+    }
+    m.pool_next = c[kPoolNext];
+    stats.blocks_allocated = c[kCreated];
+    stats.allocate_ms = ms_since(t0);
+    if (c[kError] & (kErrorPool | kErrorProbe)) {
+      const int x = int(c[kErrorKey]), y = int(c[kErrorKey + 1]), z = int(c[kErrorKey + 2]);
+      std::ostringstream msg;
+      if (c[kError] & kErrorPool)
+        msg << "voxel block pool full on the device (" << device_name() << "): capacity " << params_.capacity_blocks
+            << " blocks (" << params_.capacity_blocks * sizeof(VoxelBlock) / (1024 * 1024)
+            << " MiB) reached while allocating block (" << x << ", " << y << ", " << z
+            << "); raise VolumeParams::capacity_blocks (--capacity-blocks)";
+      else
+        msg << "voxel block hash on the device (" << device_name() << "): block (" << x << ", " << y << ", " << z
+            << ") found no free entry within " << m.options.max_probe << " of its home (DeviceGridOptions::max_probe)";
+      throw CapacityError(msg.str());
+    }
+    const cl_uint n_visible = c[kVisible];
+    m.last_visible = n_visible;
+
+    // Phase 2: the block frames, the point-to-plane factors, the voxels.
+    auto t1 = std::chrono::steady_clock::now();
+    if (n_visible > 0) {
+      const hf_intrinsics K = camera.kernel_intrinsics();
+      const float mu = float(params_.truncation_m());
+      m.block_frames.setArg(0, m.visible);
+      m.block_frames.setArg(1, n_visible);
+      m.block_frames.setArg(2, m.table);
+      m.block_frames.setArg(3, m.constants);
+      m.block_frames.setArg(4, W);
+      m.block_frames.setArg(5, H);
+      m.block_frames.setArg(6, m.frames);
+      m.block_frames.setArg(7, m.counters);
+      q.enqueueNDRangeKernel(m.block_frames, cl::NullRange, cl::NDRange(size_t(n_visible)));
+      if (params.point_to_plane) {
+        const auto t_inc = std::chrono::steady_clock::now();
+        m.incidence.setArg(0, m.depth);
+        m.incidence.setArg(1, K);
+        m.incidence.setArg(2, mu);
+        m.incidence.setArg(3, m.incidence_map);
+        q.enqueueNDRangeKernel(m.incidence, cl::NullRange, cl::NDRange(size_t(W), size_t(H)));
+        q.finish();
+        stats.incidence_ms = ms_since(t_inc);
+      }
+      const bool has_rgb = !colour.empty();
+      if (has_rgb) q.enqueueWriteBuffer(m.rgb, CL_FALSE, 0, n_pixels * 3, colour.data());
+      const Eigen::Matrix3d& R = R_cw;
+      cl_float4 steps[3];
+      for (int a = 0; a < 3; ++a) {
+        steps[a] = {{float(R(0, a) * params_.voxel_m), float(R(1, a) * params_.voxel_m),
+                     float(R(2, a) * params_.voxel_m), 0.0f}};
+      }
+      int arg = 0;
+      m.update.setArg(arg++, m.visible);
+      m.update.setArg(arg++, n_visible);
+      m.update.setArg(arg++, m.table);
+      m.update.setArg(arg++, m.frames);
+      for (const cl_float4& s : steps) m.update.setArg(arg++, s);
+      m.update.setArg(arg++, m.depth);
+      m.update.setArg(arg++, m.incidence_map);
+      m.update.setArg(arg++, cl_int(params.point_to_plane ? 1 : 0));
+      m.update.setArg(arg++, m.rgb);
+      m.update.setArg(arg++, cl_int(has_rgb ? 1 : 0));
+      m.update.setArg(arg++, K);
+      m.update.setArg(arg++, mu);
+      m.update.setArg(arg++, params_.max_weight);
+      m.update.setArg(arg++, params.observation_weight);
+      m.update.setArg(arg++, m.pool);
+      m.update.setArg(arg++, m.counters);
+      q.enqueueNDRangeKernel(m.update, cl::NullRange,
+                             cl::NDRange(round_up(size_t(n_visible) * HF_VOXELS_PER_BLOCK, kUpdateGroup)),
+                             cl::NDRange(kUpdateGroup));
+      c = m.read_counters();
+    }
+    stats.update_ms = ms_since(t1);
+  } catch (const Error&) {
+    throw;
+  } catch (...) {
+    opencl::rethrow_as_hf_error(m.where());
+  }
+  stats.voxels_updated = c[kUpdated];
+  stats.blocks_visible = c[kInView];
+  stats.blocks_total = m.pool_next;
+  stats.memory_bytes = m.pool_next * sizeof(VoxelBlock) + m.entries * sizeof(Entry);
+  return stats;
+}
+
+void DeviceVoxelGrid::check_host_grid(const VoxelBlockGrid& grid) const {
+  const VolumeParams& g = grid.params();
+  if (g.voxel_m != params_.voxel_m || g.truncation_vox != params_.truncation_vox || g.max_weight != params_.max_weight)
+    throw Error("DeviceVoxelGrid: the host grid's voxel_m / truncation_vox / max_weight differ from the device map's");
+}
+
+size_t DeviceVoxelGrid::read_into(VoxelBlockGrid& grid) const {
+  check_host_grid(grid);
+  Impl& m = *impl_;
+  try {
+    // The table, then the pool's used prefix in one read (slots are handed out from 0 up).
+    std::vector<Entry> entries(m.entries);
+    m.ctx->queue().enqueueReadBuffer(m.table, CL_TRUE, 0, m.entries * sizeof(Entry), entries.data());
+    std::vector<Voxel> pool(size_t(m.pool_next) * HF_VOXELS_PER_BLOCK);
+    if (!pool.empty())
+      m.ctx->queue().enqueueReadBuffer(m.pool, CL_TRUE, 0, pool.size() * sizeof(Voxel), pool.data());
+    std::vector<Entry> wanted;
+    std::vector<Voxel> voxels;
+    for (const Entry& e : entries) {
+      if (e.value == 0 || e.value > m.pool_next) continue;
+      wanted.push_back(e);
+      voxels.insert(voxels.end(), pool.begin() + std::ptrdiff_t(e.value - 1) * HF_VOXELS_PER_BLOCK,
+                    pool.begin() + std::ptrdiff_t(e.value) * HF_VOXELS_PER_BLOCK);
+    }
+    return Impl::copy_into(grid, wanted, voxels);
+  } catch (const Error&) {
+    throw;
+  } catch (...) {
+    opencl::rethrow_as_hf_error(m.where());
+  }
+}
+
+size_t DeviceVoxelGrid::read_last_frame_into(VoxelBlockGrid& grid) const {
+  check_host_grid(grid);
+  Impl& m = *impl_;
+  const size_t n = m.last_visible;
+  if (n == 0) return 0;
+  try {
+    cl::CommandQueue& q = m.ctx->queue();
+    if (n > m.staging_blocks) {
+      m.staging_blocks = std::max(n, 2 * m.staging_blocks);
+      m.staging = cl::Buffer(m.ctx->context(), CL_MEM_READ_WRITE, m.staging_blocks * sizeof(VoxelBlock));
+      m.staging_entries = cl::Buffer(m.ctx->context(), CL_MEM_READ_WRITE, m.staging_blocks * sizeof(Entry));
+    }
+    m.gather.setArg(0, m.visible);
+    m.gather.setArg(1, cl_uint(n));
+    m.gather.setArg(2, m.table);
+    m.gather.setArg(3, m.pool);
+    m.gather.setArg(4, m.staging);
+    m.gather.setArg(5, m.staging_entries);
+    q.enqueueNDRangeKernel(m.gather, cl::NullRange, cl::NDRange(n * HF_VOXELS_PER_BLOCK));
+    std::vector<Entry> wanted(n);
+    std::vector<Voxel> voxels(n * HF_VOXELS_PER_BLOCK);
+    q.enqueueReadBuffer(m.staging, CL_FALSE, 0, voxels.size() * sizeof(Voxel), voxels.data());
+    q.enqueueReadBuffer(m.staging_entries, CL_TRUE, 0, n * sizeof(Entry), wanted.data());
+    return Impl::copy_into(grid, wanted, voxels);
+  } catch (const Error&) {
+    throw;
+  } catch (...) {
+    opencl::rethrow_as_hf_error(m.where());
+  }
+}
+
+}  // namespace hf::fusion

@@ -1,0 +1,98 @@
+// The voxel-block map on an OpenCL device and integrate() there (issue 20).
+//
+//   auto ctx = hf::opencl::Context::shared();           // registration/opencl/opencl_context.h: device choice
+//   hf::fusion::DeviceVoxelGrid map(volume, ctx);        // volume: VolumeParams (validated)
+//   map.integrate(depth, colour, camera, T_world_camera, params);  // as fusion::integrate, on the device
+//   VoxelBlockGrid grid(volume);  map.read_into(grid);   // meshing, streaming, save/load on the host
+//
+// Layout, VoxelBlockGrid's (fusion/block_hash_table.h, fusion/kernels/voxel.h): a table of
+// bit_ceil(max(16, 2 capacity_blocks)) 16-byte entries {x, y, z, value = pool slot + 1, 0 empty}, the home entry
+// BlockHashTable's Fibonacci mix of the coordinates, linear probing bounded by DeviceGridOptions::max_probe; a pool
+// of capacity_blocks blocks of 512 8-byte hf_voxels (x fastest), allocated on the device up front.
+//
+// integrate() is fusion::integrate's two phases as six kernels (fusion/opencl/integrate.cl): the CPU's band and
+// block walk per pixel (same arithmetic and neighbour skip, so the same blocks), a parallel look-up, creation of
+// the missing blocks by one work-item (no 64-bit atomics needed: OpenCL 1.2 has 32-bit ones only), then the shared
+// per-voxel kernel of fusion/kernels/integrate_kernels.h, projective or point-to-plane. On a device with
+// cl_khr_fp64 and correctly rounded division (PoCL) the voxels equal the CPU's bit for bit
+// (tests/fusion/opencl); without fp64 the band geometry is float and edge blocks may differ.
+//
+// Errors: hf::Error for a frame whose size does not match the camera, and for OpenCL failures ("integrate on
+// DEVICE: clX: CL_NAME (code)"); CapacityError (fusion/voxel_block_grid.h) when the pool is full or a block's
+// probe run would exceed max_probe, naming the block: the frame is then partly allocated and no voxel updated,
+// as on the CPU (a block that found no slot stays missing). DeviceMemoryError from the constructor when the pool
+// does not fit the device's largest allocation or its memory. A NaN, zero or out-of-range depth pixel allocates
+// nothing; an empty frame changes nothing.
+//
+// Not (yet) on the device: releasing blocks (garbage collection, streaming: the pool only grows until clear()),
+// deintegration, the raycast. Thread-safety: one call at a time per map (the context's queue is shared: other
+// users of the context must serialise their own command sequences, as the registration backend does).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "core/camera.h"
+#include "core/error.h"
+#include "core/image.h"
+#include "core/se3.h"
+#include "fusion/integrate.h"
+#include "fusion/voxel_block_grid.h"
+
+namespace hf::opencl {
+class Context;
+}
+
+namespace hf::fusion {
+
+// The device cannot hold the map (pool larger than its largest allocation or its global memory).
+class DeviceMemoryError : public Error {
+ public:
+  using Error::Error;
+};
+
+struct DeviceGridOptions {
+  // Longest probe run of a block's entry from its home; a longer one is a CapacityError. 64 entries at load
+  // <= 0.5 is far beyond the runs linear probing makes there (mean ~1.5).
+  int max_probe = 64;
+};
+
+class DeviceVoxelGrid {
+ public:
+  // context null = hf::opencl::Context::shared(). Throws hf::Error (no platform, bad params), DeviceMemoryError.
+  explicit DeviceVoxelGrid(const VolumeParams& params, std::shared_ptr<opencl::Context> context = nullptr,
+                           const DeviceGridOptions& options = {});
+  ~DeviceVoxelGrid();
+  DeviceVoxelGrid(const DeviceVoxelGrid&) = delete;
+  DeviceVoxelGrid& operator=(const DeviceVoxelGrid&) = delete;
+
+  const VolumeParams& params() const { return params_; }
+  // "platform / device" of the device the map lives on.
+  std::string device_name() const;
+
+  // fusion::integrate (fusion/integrate.h) on the device, with the same inputs, stats (blocks_streamed_in 0) and
+  // errors (see above). allocate_ms / update_ms are wall time on the host, each phase up to its completion.
+  IntegrateStats integrate(const DepthImage& depth, const ColorImage& colour, const PinholeCamera& camera,
+                           const SE3& T_world_camera, const IntegrateParams& params = {});
+
+  size_t block_count() const;
+  // Copies every device block into `grid` (same voxel_m, truncation and max_weight, else hf::Error), creating the
+  // blocks it lacks and overwriting the ones it has; each copied block's surface_free flag is set from its voxels.
+  // Blocks of `grid` the device does not hold are left alone. Throws CapacityError when `grid` runs out of room.
+  // Returns the number of blocks copied.
+  size_t read_into(VoxelBlockGrid& grid) const;
+  // The same for the blocks the last integrate() updated (its visible set): what a host copy of the map needs to
+  // follow the device after one frame.
+  size_t read_last_frame_into(VoxelBlockGrid& grid) const;
+  void clear();
+
+ private:
+  void check_host_grid(const VoxelBlockGrid& grid) const;
+  struct Impl;
+  VolumeParams params_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace hf::fusion

@@ -1,0 +1,201 @@
+// fusion/opencl/device_voxel_grid.h against the CPU's integrate() (fusion/integrate.h), voxel by voxel, and its
+// failure modes. Every test skips with a message when no OpenCL platform is installed; in CI they run on PoCL.
+#include "fusion/opencl/device_voxel_grid.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <limits>
+#include <string>
+
+#include "datasets/synthetic_sequence.h"
+#include "fusion/integrate.h"
+#include "registration/opencl/opencl_context.h"
+
+namespace hf::fusion {
+namespace {
+
+std::shared_ptr<opencl::Context> context() {
+  if (opencl::list_devices().empty()) return nullptr;
+  return opencl::Context::shared();
+}
+
+#define HF_CONTEXT_OR_SKIP(ctx)                                                                            \
+  const std::shared_ptr<opencl::Context> ctx = context();                                                  \
+  if (!ctx) {                                                                                              \
+    GTEST_SKIP() << "no OpenCL platform found (install pocl-opencl-icd): device fusion is not tested";     \
+  }
+
+PinholeCamera small_camera() { return PinholeCamera::preset("ros").scaled(2); }  // 160x120
+
+VolumeParams params_1cm(size_t capacity = 1 << 14) {
+  VolumeParams p;
+  p.voxel_m = 0.01;
+  p.truncation_vox = 4.0;
+  p.capacity_blocks = capacity;
+  return p;
+}
+
+datasets::SyntheticSequence room(int frames) {
+  datasets::SyntheticOptions options;
+  options.preset = "room";
+  options.frames = frames;
+  options.camera = small_camera();
+  return datasets::SyntheticSequence(options);
+}
+
+struct Agreement {
+  size_t blocks = 0, voxels = 0, identical = 0, max_sdf_steps = 0, max_colour = 0, weight_differs = 0;
+  bool same_blocks = false;
+};
+
+// Voxel by voxel. sdf in quantisation steps (1/32767 of mu), colour in units.
+Agreement compare(const VoxelBlockGrid& a, const VoxelBlockGrid& b) {
+  Agreement out;
+  const auto ca = a.block_coords(), cb = b.block_coords();
+  out.same_blocks = ca == cb;
+  out.blocks = ca.size();
+  for (const BlockCoord& c : ca) {
+    const VoxelBlock* x = a.find(c);
+    const VoxelBlock* y = b.find(c);
+    if (y == nullptr) continue;
+    for (int i = 0; i < HF_VOXELS_PER_BLOCK; ++i) {
+      const Voxel& u = x->voxels[size_t(i)];
+      const Voxel& v = y->voxels[size_t(i)];
+      ++out.voxels;
+      out.identical += std::memcmp(&u, &v, sizeof(Voxel)) == 0;
+      out.max_sdf_steps = std::max<size_t>(out.max_sdf_steps, size_t(std::abs(int(u.sdf) - int(v.sdf))));
+      out.max_colour = std::max<size_t>(
+          {out.max_colour, size_t(std::abs(int(u.r) - int(v.r))), size_t(std::abs(int(u.g) - int(v.g))),
+           size_t(std::abs(int(u.b) - int(v.b)))});
+      out.weight_differs += u.weight != v.weight;
+    }
+  }
+  return out;
+}
+
+// The device's voxels equal the CPU's where the arithmetic is the same: with cl_khr_fp64 and correctly rounded
+// division (PoCL) bit for bit; otherwise the band geometry is float, the blocks may differ at band edges and a voxel
+// by one sdf step or colour unit (the rounding of its quantised average).
+void expect_agreement(const VoxelBlockGrid& cpu, const VoxelBlockGrid& device, bool fp64) {
+  const Agreement ag = compare(cpu, device);
+  ASSERT_GT(ag.blocks, 50u);
+  if (fp64) {
+    EXPECT_TRUE(ag.same_blocks);
+    EXPECT_EQ(ag.identical, ag.voxels) << "max sdf difference " << ag.max_sdf_steps << " steps";
+  } else {
+    EXPECT_LE(ag.max_sdf_steps, 1u);
+    EXPECT_LE(ag.max_colour, 1u);
+    EXPECT_EQ(ag.weight_differs, 0u);
+  }
+}
+
+void integrate_both(bool point_to_plane) {
+  const auto ctx = context();
+  const VolumeParams volume = params_1cm();
+  const PinholeCamera camera = small_camera();
+  const auto seq = room(9);
+  IntegrateParams ip;
+  ip.point_to_plane = point_to_plane;
+  VoxelBlockGrid cpu(volume), mirror(volume);
+  DeviceVoxelGrid device(volume, ctx);
+  for (int i = 0; i < 3; ++i) {
+    const auto f = seq.frame(i * 4);
+    const IntegrateStats a = integrate(cpu, f.depth, f.color, camera, f.T_world_camera, ip);
+    const IntegrateStats b = device.integrate(f.depth, f.color, camera, f.T_world_camera, ip);
+    EXPECT_EQ(b.pixels_used, a.pixels_used);
+    EXPECT_EQ(b.blocks_allocated, a.blocks_allocated);
+    EXPECT_EQ(b.blocks_visible, a.blocks_visible);
+    if (ctx->info().has_fp64) {
+      EXPECT_EQ(b.voxels_updated, a.voxels_updated);
+    }
+    device.read_last_frame_into(mirror);  // a host copy that follows the device frame by frame
+  }
+  EXPECT_EQ(device.block_count(), cpu.block_count());
+  VoxelBlockGrid whole(volume);
+  EXPECT_EQ(device.read_into(whole), device.block_count());
+  expect_agreement(cpu, whole, ctx->info().has_fp64);
+  expect_agreement(cpu, mirror, ctx->info().has_fp64);
+}
+
+TEST(DeviceVoxelGrid, ProjectiveIntegrateMatchesCpuVoxelByVoxel) {
+  HF_CONTEXT_OR_SKIP(ctx);
+  integrate_both(false);
+}
+
+TEST(DeviceVoxelGrid, PointToPlaneIntegrateMatchesCpuVoxelByVoxel) {
+  HF_CONTEXT_OR_SKIP(ctx);
+  integrate_both(true);
+}
+
+// InfiniTAM stops silently when its block budget is exhausted; here the frame fails with the typed error, the
+// pool holds exactly its capacity, and no voxel was updated (as the CPU's integrate()).
+TEST(DeviceVoxelGrid, PoolExhaustionIsCapacityErrorWithNothingUpdated) {
+  HF_CONTEXT_OR_SKIP(ctx);
+  const VolumeParams volume = params_1cm(32);
+  DeviceVoxelGrid device(volume, ctx);
+  const auto f = room(1).frame(0);
+  try {
+    device.integrate(f.depth, f.color, small_camera(), f.T_world_camera);
+    FAIL() << "expected CapacityError";
+  } catch (const CapacityError& e) {
+    EXPECT_NE(std::string(e.what()).find("capacity 32 blocks"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(device.block_count(), 32u);
+  VoxelBlockGrid grid(volume);
+  EXPECT_EQ(device.read_into(grid), 32u);
+  for (const auto& [c, block] : grid.blocks())
+    for (const Voxel& v : block->voxels) ASSERT_EQ(v.weight, 0) << "a voxel was updated by the failed frame";
+}
+
+// A probe bound of one entry cannot hold a frame's thousand blocks in a table of 2^15 entries without a collision:
+// typed error naming the bound, never a block dropped in silence.
+TEST(DeviceVoxelGrid, ProbeBoundIsCapacityError) {
+  HF_CONTEXT_OR_SKIP(ctx);
+  DeviceGridOptions options;
+  options.max_probe = 1;
+  DeviceVoxelGrid device(params_1cm(), ctx, options);
+  const auto f = room(1).frame(0);
+  try {
+    device.integrate(f.depth, f.color, small_camera(), f.T_world_camera);
+    FAIL() << "expected CapacityError";
+  } catch (const CapacityError& e) {
+    EXPECT_NE(std::string(e.what()).find("max_probe"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DeviceVoxelGrid, NanInfAndEmptyFramesChangeNothing) {
+  HF_CONTEXT_OR_SKIP(ctx);
+  const VolumeParams volume = params_1cm();
+  const PinholeCamera camera = small_camera();
+  DeviceVoxelGrid device(volume, ctx);
+  const auto f = room(1).frame(0);
+  device.integrate(f.depth, f.color, camera, f.T_world_camera);
+  VoxelBlockGrid before(volume);
+  device.read_into(before);
+  for (float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), 0.0f, -1.0f}) {
+    const DepthImage depth(camera.width, camera.height, bad);
+    const IntegrateStats s = device.integrate(depth, ColorImage(), camera, f.T_world_camera);
+    EXPECT_EQ(s.pixels_used, 0u) << bad;
+    EXPECT_EQ(s.blocks_allocated, 0u) << bad;
+    EXPECT_EQ(s.voxels_updated, 0u) << bad;
+  }
+  VoxelBlockGrid after(volume);
+  device.read_into(after);
+  const Agreement ag = compare(before, after);
+  EXPECT_TRUE(ag.same_blocks);
+  EXPECT_EQ(ag.identical, ag.voxels);
+}
+
+TEST(DeviceVoxelGrid, BadFrameAndOversizedPoolAreTypedErrors) {
+  HF_CONTEXT_OR_SKIP(ctx);
+  DeviceVoxelGrid device(params_1cm(), ctx);
+  const PinholeCamera camera = small_camera();
+  DepthImage wrong(camera.width + 1, camera.height);
+  EXPECT_THROW(device.integrate(wrong, ColorImage(), camera, SE3::identity()), Error);
+  VolumeParams huge = params_1cm(size_t(1) << 26);  // 256 GiB of voxels
+  EXPECT_THROW(DeviceVoxelGrid(huge, ctx), DeviceMemoryError);
+}
+
+}  // namespace
+}  // namespace hf::fusion
