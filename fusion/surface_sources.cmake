@@ -1,1 +1,1 @@
-list(APPEND HF_FUSION_SOURCES raycast.cpp mesh.cpp)
+list(APPEND HF_FUSION_SOURCES raycast.cpp raycast_sampled.cpp mesh.cpp)

@@ -83,7 +83,8 @@ Image<std::uint8_t> select_pixels(const FramePyramidLevel& level, const PixelSel
       c.clear();
       for (int y = y0; y < std::min(y0 + T, H); ++y)
         for (int x = x0; x < std::min(x0 + T, W); ++x)
-          if (v(x, y).w != 0.0f) c.push_back({by_importance ? score(x, y) : 0.0f, dither_rank(x - x0, y - y0, T), x, y});
+          if (v(x, y).w != 0.0f)
+            c.push_back({by_importance ? score(x, y) : 0.0f, dither_rank(x - x0, y - y0, T), x, y});
       if (int(c.size()) > B) {
         // Higher importance first, then the lower dither rank (unique within the tile: a strict total order).
         std::nth_element(c.begin(), c.begin() + B, c.end(), [](const Candidate& a, const Candidate& b) {

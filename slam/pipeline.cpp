@@ -10,6 +10,8 @@
 #include "core/error.h"
 #include "core/kernels/image_kernels.h"
 #include "fusion/mesh.h"
+#include "fusion/raycast_sampled.h"
+#include "registration/pixel_selection.h"
 
 namespace hf::slam {
 namespace {
@@ -537,7 +539,15 @@ void Pipeline::raycast_reference(FramePyramid& current, const SE3& T_world_cur, 
           if (v(x, y).w != 0.0f) hint(x, y) = v(x, y).z;
     ro.depth_hint = &hint;
   }
-  fusion::raycast(grid_, tracking_camera_, T_world_cur, ro, &reference_->model);
+  if (config_.tracking_raycast == "sampled" && !current.levels.empty() && config_.registration_options) {
+    // Only the rays whose vertices the next frame's selected rows will land on (this frame's selection, grown).
+    const PixelSelectionOptions& selection = config_.registration_options->driver.row_selection;
+    const Image<std::uint8_t> rays = select_pixels(current.levels[0], selection);
+    fusion::raycast_sampled(grid_, tracking_camera_, T_world_cur, ro,
+                            fusion::dilate_rays(rays, config_.tracking_raycast_dilate_px), &reference_->model);
+  } else {
+    fusion::raycast(grid_, tracking_camera_, T_world_cur, ro, &reference_->model);
+  }
   reference_->T_world_model = T_world_cur;
   reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
                                             tracking_camera_, config_.pyramid.levels);

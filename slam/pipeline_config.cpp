@@ -188,6 +188,8 @@ void visit_scalars(V&& v, PipelineConfig& c) {
   v("max_degenerate_dims", c.max_degenerate_dims);
   v("integrate_poor", c.integrate_poor);
   v("model_hint", c.model_hint);
+  v("tracking_raycast", c.tracking_raycast);
+  v("tracking_raycast_dilate_px", c.tracking_raycast_dilate_px);
   v("min_overlap", c.min_overlap);
   v("min_consistent", c.min_consistent);
   v("stream_radius_m", c.stream_radius_m);
@@ -293,6 +295,10 @@ void PipelineConfig::validate() const {
   if (pyramid.fill_holes_levels < 0 || pyramid.fill_holes_levels > 8)
     throw Error("pyramid.fill_holes_levels must be in [0, 8]");
   if (tracking_level < 0 || tracking_level > 2) throw Error("tracking_level must be 0, 1 or 2");
+  if (tracking_raycast != "full" && tracking_raycast != "sampled")
+    throw Error("tracking_raycast must be \"full\" or \"sampled\", got \"" + tracking_raycast + "\"");
+  if (tracking_raycast_dilate_px < 0 || tracking_raycast_dilate_px > 16)
+    throw Error("tracking_raycast_dilate_px must be in [0, 16]");
   if (registration_options) registration_options->validate();
   if (!(max_speed_m_per_s > 0)) throw Error("max_speed_m_per_s must be positive");
   if (!(max_angular_speed_deg_per_s > 0)) throw Error("max_angular_speed_deg_per_s must be positive");

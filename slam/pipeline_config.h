@@ -55,6 +55,12 @@ struct PipelineConfig {
   // Where the frame has no depth, hint the tracking raycast with the last model raycast moved to the new pose
   // (fusion::forward_project_depth) instead of marching those rays from the near end of their tile.
   bool model_hint = true;
+  // The tracking raycast: "full" (every pixel) or "sampled" (fusion/raycast_sampled.h: only the pixels the
+  // registration's row selection, GaussNewtonOptions::row_selection, keeps in this frame, grown by
+  // tracking_raycast_dilate_px for the motion to the next frame; a selection of `all` casts every valid pixel's
+  // ray). Integration and render() always raycast in full. Measured in bench/results/fewer_rays_tracking.md.
+  std::string tracking_raycast = "full";
+  int tracking_raycast_dilate_px = 2;
   FramePyramidOptions pyramid;
   // The pyramid level tracking starts at: 0 = full resolution; 1 = half (DVO-SLAM tracked at 320x240 in real time
   // on one core). Tracking then uses pyramid.levels levels from there, and the model is raycast at that resolution;

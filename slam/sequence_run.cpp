@@ -272,6 +272,7 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
     if (f.registration) {
       fj["registration_status"] = hf::to_string(f.registration->status);
       fj["inlier_ratio"] = f.registration->inlier_ratio;
+      fj["inliers"] = f.registration->inliers;
       fj["degenerate_dims"] = f.registration->degenerate_dims;
     }
     if (!f.message.empty()) fj["message"] = f.message;

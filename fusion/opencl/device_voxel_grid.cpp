@@ -4,6 +4,7 @@
 #include <array>
 #include <bit>
 #include <chrono>
+#include <cstddef>
 #include <cstring>
 #include <sstream>
 #include <string_view>
@@ -40,6 +41,14 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 }
 
 size_t round_up(size_t n, size_t m) { return (n + m - 1) / m * m; }
+
+// integrate.cl's hf_block_home (BlockHashTable's home entry).
+std::uint32_t block_home(int x, int y, int z, int shift) {
+  const std::uint64_t k = (std::uint64_t(std::uint32_t(x)) * 0x9E3779B97F4A7C15ull) ^
+                          (std::uint64_t(std::uint32_t(y)) * 0xC2B2AE3D27D4EB4Full) ^
+                          (std::uint64_t(std::uint32_t(z)) * 0x165667B19E3779F9ull);
+  return std::uint32_t((k * 0x9E3779B97F4A7C15ull) >> shift);
+}
 
 }  // namespace
 
@@ -363,6 +372,40 @@ void DeviceVoxelGrid::check_host_grid(const VoxelBlockGrid& grid) const {
   const VolumeParams& g = grid.params();
   if (g.voxel_m != params_.voxel_m || g.truncation_vox != params_.truncation_vox || g.max_weight != params_.max_weight)
     throw Error("DeviceVoxelGrid: the host grid's voxel_m / truncation_vox / max_weight differ from the device map's");
+}
+
+void DeviceVoxelGrid::load(const VoxelBlockGrid& grid) {
+  check_host_grid(grid);
+  Impl& m = *impl_;
+  const auto blocks = grid.blocks();
+  if (blocks.size() > params_.capacity_blocks)
+    throw CapacityError("DeviceVoxelGrid::load: the host grid holds " + std::to_string(blocks.size()) +
+                        " blocks, the device pool " + std::to_string(params_.capacity_blocks));
+  // The table and the pool built here, in block_coords() order, with the device's probe bound.
+  std::vector<Entry> table(m.entries, Entry{0, 0, 0, 0});
+  std::vector<Voxel> pool(blocks.size() * HF_VOXELS_PER_BLOCK);
+  for (size_t slot = 0; slot < blocks.size(); ++slot) {
+    const BlockCoord& c = blocks[slot].first;
+    std::uint32_t e = block_home(c.x, c.y, c.z, m.shift);
+    int probe = 0;
+    while (table[e].value != 0 && probe < m.options.max_probe) e = (e + 1) & std::uint32_t(m.entries - 1), ++probe;
+    if (probe == m.options.max_probe)
+      throw CapacityError("DeviceVoxelGrid::load: block (" + std::to_string(c.x) + ", " + std::to_string(c.y) + ", " +
+                          std::to_string(c.z) + ") found no free entry within " +
+                          std::to_string(m.options.max_probe) + " of its home (DeviceGridOptions::max_probe)");
+    table[e] = Entry{c.x, c.y, c.z, std::uint32_t(slot + 1)};
+    std::memcpy(pool.data() + slot * HF_VOXELS_PER_BLOCK, blocks[slot].second->voxels.data(), sizeof(VoxelBlock));
+  }
+  clear();
+  try {
+    cl::CommandQueue& q = m.ctx->queue();
+    q.enqueueWriteBuffer(m.table, CL_FALSE, 0, table.size() * sizeof(Entry), table.data());
+    if (!pool.empty()) q.enqueueWriteBuffer(m.pool, CL_FALSE, 0, pool.size() * sizeof(Voxel), pool.data());
+    q.finish();
+  } catch (...) {
+    opencl::rethrow_as_hf_error(m.where());
+  }
+  m.pool_next = std::uint32_t(blocks.size());
 }
 
 size_t DeviceVoxelGrid::read_into(VoxelBlockGrid& grid) const {

@@ -86,6 +86,10 @@ class DeviceVoxelGrid {
   // The same for the blocks the last integrate() updated (its visible set): what a host copy of the map needs to
   // follow the device after one frame.
   size_t read_last_frame_into(VoxelBlockGrid& grid) const;
+  // Replaces the device map by the host grid's blocks (clear(), then every block of `grid`): for a host that
+  // changed its copy (deintegration, re-fusion, loading a volume). Same parameter check as read_into; CapacityError
+  // when the blocks do not fit the pool or the probe bound.
+  void load(const VoxelBlockGrid& grid);
   void clear();
 
  private:

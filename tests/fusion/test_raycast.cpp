@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <random>
@@ -14,11 +15,13 @@
 
 #include <tbb/global_control.h>
 
+#include "core/error.h"
 #include "datasets/presets.h"
 #include "datasets/synthetic_sequence.h"
 #include "fusion/integrate.h"
 #include "fusion/kernels/raycast_kernels.h"
 #include "fusion/raycast.h"
+#include "fusion/raycast_sampled.h"
 #include "tests/common/analytic_depth.h"
 
 namespace hf::fusion {
@@ -713,6 +716,55 @@ TEST(ForwardProjectDepth, PredictsTheRaycastAtANearbyPose) {
   EXPECT_LT(err[err.size() / 2], footprint / 4.0);
   EXPECT_LT(err[err.size() * 9 / 10], footprint / 2.0 * 3.0);
   EXPECT_LT(uncovered, int(err.size()) / 20);
+}
+
+// The sampled tracking raycast (fusion/raycast_sampled.h) equals the full one at every cast pixel, bit for bit, with
+// and without a depth hint, and reads as a miss elsewhere; the mask grows by a square window.
+TEST(RaycastSampled, EqualsTheFullRaycastAtTheCastPixels) {
+  VoxelBlockGrid grid(params_1cm());
+  const datasets::SyntheticFrame f = fuse_noisy_room(grid, 9, 4);
+  Image<std::uint8_t> rays(kCamera.width, kCamera.height, 0);
+  std::mt19937 rng(7);
+  for (std::uint8_t& b : rays.pixels()) b = rng() % 5 == 0 ? 1 : 0;
+  for (const DepthImage* hint : {static_cast<const DepthImage*>(nullptr), &f.depth}) {
+    RaycastOptions opts;
+    opts.depth_hint = hint;
+    const RaycastResult full = raycast(grid, kCamera, f.T_world_camera, opts);
+    RaycastResult sampled;
+    raycast_sampled(grid, kCamera, f.T_world_camera, opts, rays, &sampled);
+    int hits = 0, cast = 0;
+    for (int y = 0; y < kCamera.height; ++y)
+      for (int x = 0; x < kCamera.width; ++x) {
+        if (rays(x, y) == 0) {
+          EXPECT_EQ(sampled.depth(x, y), 0.0f);
+          EXPECT_EQ(sampled.vertices(x, y).w, 0.0f);
+          EXPECT_EQ(sampled.normals(x, y).w, 0.0f);
+          continue;
+        }
+        ++cast;
+        hits += full.depth(x, y) > 0.0f;
+        ASSERT_EQ(std::memcmp(&sampled.depth(x, y), &full.depth(x, y), sizeof(float)), 0) << x << "," << y;
+        ASSERT_EQ(std::memcmp(&sampled.vertices(x, y), &full.vertices(x, y), sizeof(hf_float4)), 0);
+        ASSERT_EQ(std::memcmp(&sampled.normals(x, y), &full.normals(x, y), sizeof(hf_float4)), 0);
+        EXPECT_EQ(sampled.color(x, y), full.color(x, y));
+        EXPECT_EQ(sampled.shaded(x, y), full.shaded(x, y));
+      }
+    EXPECT_GT(hits, cast / 2);
+    EXPECT_EQ(sampled.hit_count, hits);
+  }
+  RaycastResult out;
+  EXPECT_THROW(raycast_sampled(grid, kCamera, f.T_world_camera, {}, Image<std::uint8_t>(4, 4, 1), &out), Error);
+
+  Image<std::uint8_t> one(9, 7, 0);
+  one(0, 3) = 1, one(6, 6) = 1;
+  const Image<std::uint8_t> grown = dilate_rays(one, 2);
+  for (int y = 0; y < 7; ++y)
+    for (int x = 0; x < 9; ++x) {
+      const bool near = (x <= 2 && std::abs(y - 3) <= 2) || (x >= 4 && y >= 4);
+      EXPECT_EQ(grown(x, y), near ? 1 : 0) << x << "," << y;
+    }
+  EXPECT_EQ(dilate_rays(one, 0).pixels(), one.pixels());
+  EXPECT_THROW(dilate_rays(one, -1), Error);
 }
 
 }  // namespace

@@ -128,6 +128,26 @@ TEST(DeviceVoxelGrid, PointToPlaneIntegrateMatchesCpuVoxelByVoxel) {
   integrate_both(true);
 }
 
+// A host map changed on the host (here: fused on the CPU) loaded onto the device and fused on there goes on
+// exactly as the CPU would.
+TEST(DeviceVoxelGrid, LoadedHostMapContinuesAsOnTheCpu) {
+  HF_CONTEXT_OR_SKIP(ctx);
+  const VolumeParams volume = params_1cm();
+  const PinholeCamera camera = small_camera();
+  const auto seq = room(5);
+  VoxelBlockGrid cpu(volume);
+  const auto f0 = seq.frame(0), f1 = seq.frame(4);
+  integrate(cpu, f0.depth, f0.color, camera, f0.T_world_camera);
+  DeviceVoxelGrid device(volume, ctx);
+  device.load(cpu);
+  EXPECT_EQ(device.block_count(), cpu.block_count());
+  integrate(cpu, f1.depth, f1.color, camera, f1.T_world_camera);
+  device.integrate(f1.depth, f1.color, camera, f1.T_world_camera);
+  VoxelBlockGrid back(volume);
+  device.read_into(back);
+  expect_agreement(cpu, back, ctx->info().has_fp64);
+}
+
 // InfiniTAM stops silently when its block budget is exhausted; here the frame fails with the typed error, the
 // pool holds exactly its capacity, and no voxel was updated (as the CPU's integrate()).
 TEST(DeviceVoxelGrid, PoolExhaustionIsCapacityErrorWithNothingUpdated) {
