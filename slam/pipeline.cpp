@@ -12,6 +12,10 @@
 #include "fusion/mesh.h"
 #include "fusion/raycast_sampled.h"
 #include "registration/pixel_selection.h"
+#ifdef HF_HAVE_FUSION_OPENCL
+#include "fusion/opencl/device_voxel_grid.h"
+#include "registration/opencl/opencl_context.h"
+#endif
 
 namespace hf::slam {
 namespace {
@@ -100,6 +104,10 @@ Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
     : config_(config), camera_(camera), tracking_camera_(camera.scaled(config.tracking_level)),
       grid_((config.validate(), config.volume)),
       reference_(std::make_unique<Reference>()), keyframes_(config.keyframes), fused_(config.reintegration) {
+#ifdef HF_HAVE_FUSION_OPENCL
+  if (config_.backend == "opencl" && config_.stream_radius_m <= 0)
+    device_map_ = std::make_unique<fusion::DeviceVoxelGrid>(config_.volume);
+#endif
   if (config_.registration == "groundtruth") return;
   RegistrationOptions options = effective_registration_options(config_);
   std::vector<int>& iterations = options.driver.iterations;
@@ -360,6 +368,17 @@ std::optional<Pipeline::Verdict> Pipeline::relocalise(const RgbdFrame& frame, co
 
 void Pipeline::integrate(const RgbdFrame& frame, const SE3& T_world_cur, FrameResult* r) {
   const auto t0 = std::chrono::steady_clock::now();
+#ifdef HF_HAVE_FUSION_OPENCL
+  if (device_map_) {
+    if (device_map_stale_) device_map_->load(grid_);
+    device_map_stale_ = false;
+    device_map_->integrate(frame.depth, frame.color, camera_, T_world_cur, config_.integrate);
+    device_map_->read_last_frame_into(grid_);  // the host raycast, re-fusion and meshing read grid_
+    r->ms.integrate = ms_since(t0);
+    r->integrated = true;
+    return;
+  }
+#endif
   fusion::integrate(grid_, frame.depth, frame.color, camera_, T_world_cur, config_.integrate, &store_);
   if (config_.stream_radius_m > 0)
     fusion::stream_out(grid_, store_, T_world_cur.translation(), config_.stream_radius_m);
@@ -496,11 +515,13 @@ void Pipeline::reintegrate(FrameResult* r) {
   r->reintegrated += fused_.step(size_t(config_.reintegration.frames_per_step), keyframes_, grid_, camera_,
                                 config_.integrate, &store_);
   r->ms.reintegrate += ms_since(t0);
+  if (r->reintegrated > 0) device_map_stale_ = true;  // also the loop's burst (close_loops runs just before)
 }
 
 double Pipeline::finish(bool global) {
   const auto t0 = std::chrono::steady_clock::now();
   if (!registration_) return 0.0;
+  device_map_stale_ = true;
   commit_pending_images();
   if (global && keyframes_.size() > 1) {
     PoseGraphOptions o = config_.loop_closure.graph;
@@ -623,6 +644,21 @@ ColorImage Pipeline::render(const SE3& T_world_camera) const {
   fusion::RaycastOptions options = config_.raycast;
   options.shade = true;
   return fusion::raycast(grid_, camera_, T_world_camera, options).shaded;
+}
+
+std::map<std::string, std::string> Pipeline::stage_devices() const {
+  std::map<std::string, std::string> d{{"preprocess", "cpu"}, {"registration", "cpu"}, {"integrate", "cpu"},
+                                       {"raycast", "cpu"}};
+#ifdef HF_HAVE_FUSION_OPENCL
+  if (device_map_) d["integrate"] = device_map_->device_name();
+  if (config_.backend == "opencl" && registration_) {
+    const opencl::DeviceInfo& info = opencl::Context::shared()->info();
+    d["registration"] = info.platform_name + " / " + info.device_name;  // the reductions
+  }
+#else
+  if (config_.backend == "opencl" && registration_) d["registration"] = "opencl";
+#endif
+  return d;
 }
 
 }  // namespace hf::slam

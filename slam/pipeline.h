@@ -65,6 +65,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 #include <future>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -84,6 +85,10 @@
 #include "slam/loop_closure.h"
 #include "slam/pipeline_config.h"
 #include "slam/reintegration.h"
+
+namespace hf::fusion {
+class DeviceVoxelGrid;  // fusion/opencl/device_voxel_grid.h
+}
 
 namespace hf::slam {
 
@@ -157,6 +162,10 @@ class Pipeline {
   TriangleMesh extract_mesh() const;
   // A shaded raycast of the model from `T_world_camera` with the pipeline's camera, for people.
   ColorImage render(const SE3& T_world_camera) const;
+  // Where each stage runs (report.json "devices"): preprocess, registration, integrate, raycast -> "cpu" or the
+  // OpenCL device's "platform / device". backend = "opencl" integrates on the device (fusion/opencl) unless
+  // stream_radius_m > 0 (streaming is host-only); the host map follows the device's frame by frame.
+  std::map<std::string, std::string> stage_devices() const;
 
  private:
   struct Reference;
@@ -184,6 +193,8 @@ class Pipeline {
   PinholeCamera camera_;
   PinholeCamera tracking_camera_;  // camera_.scaled(tracking_level)
   fusion::VoxelBlockGrid grid_;
+  std::unique_ptr<fusion::DeviceVoxelGrid> device_map_;  // backend opencl: the map integrate() fuses into
+  bool device_map_stale_ = false;  // grid_ changed on the host (re-fusion): load it before the next integrate
   fusion::BlockStore store_;
   std::unique_ptr<Registration> registration_;  // null for groundtruth
   std::unique_ptr<Registration> fallback_;      // null when none

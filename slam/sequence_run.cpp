@@ -217,6 +217,7 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
   j["camera_origin"] = source.camera_origin();
   j["registration"] = s.registration;
   j["backend"] = s.backend;
+  j["devices"] = pipeline.stage_devices();
   j["voxel_m"] = s.voxel_m;
   j["frames"] = s.frames;
   j["frames_bad"] = s.frames_bad;
