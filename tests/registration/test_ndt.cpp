@@ -12,6 +12,7 @@
 #include "registration/ndt/ndt_from_tsdf.h"
 #include "registration/ndt/ndt_newton.h"
 #include "registration/ndt/ndt_options.h"
+#include "registration/mrsmap.h"
 #include "registration/ndt_color.h"
 
 namespace hf {
@@ -105,7 +106,7 @@ RegistrationResult align_with(const std::string& method, const test::FramePair& 
 // so (ndt_newton.h: the information keeps only the directions a cell is thin in).
 TEST(Ndt, PlaneReportsItsFreeDirectionsAsDegenerate) {
   const test::FramePair pair = test::make_pair("wall", 5, 6, true);
-  for (const std::string method : {"ndt-p2d", "ndt-d2d", "ndt-color"}) {
+  for (const std::string method : {"ndt-p2d", "ndt-d2d", "ndt-color", "mrsmap"}) {
     const RegistrationResult r = align_with(method, pair);
     EXPECT_EQ(r.status, RegistrationStatus::degenerate) << method << " " << r.message;
     EXPECT_EQ(r.degenerate_dims, 3) << method;
@@ -199,6 +200,29 @@ TEST(Ndt, ColourMethodsWithoutColourAreNoData) {
     test::expect_finite(r);
     EXPECT_EQ(r.status, RegistrationStatus::no_data) << method << " " << r.message;
   }
+}
+
+// mrsmap's shape-texture descriptor: a surfel inside a flat plane of one colour has every neighbour in the
+// middle bin of each histogram (alpha = phi = theta = 0, same luminance); a brighter half-plane moves the
+// luminance counts of the surfels beside it to "brighter", exactly by the share of brighter neighbours.
+TEST(Ndt, SurfelDescriptorOfAPlane) {
+  NdtGrid grid(0.1, {});
+  for (int i = 0; i < 100; ++i) {
+    for (int j = 0; j < 100; ++j) {
+      const Eigen::Vector3d p(i * 0.005 + 0.0025, j * 0.005 + 0.0025, 1.05 + 0.001 * ((i * 7 + j * 3) % 5));
+      grid.add(p, 1.0, p.x() < 0.25 ? 0.3 : 0.6);
+    }
+  }
+  grid.finish();
+  const NdtCell* middle = grid.find(Eigen::Vector3d(0.05, 0.25, 1.05));
+  const NdtCell* edge = grid.find(Eigen::Vector3d(0.15, 0.25, 1.05));  // its +x neighbours are brighter
+  ASSERT_TRUE(middle != nullptr && edge != nullptr);
+  const SurfelDescriptor h = surfel_descriptor(grid, *middle, 0.05);
+  for (const int b : {1, 4, 7, 10}) EXPECT_NEAR(h(b), 1.0, 1e-9) << b;
+  EXPECT_NEAR(h.sum(), 4.0, 1e-9);
+  const SurfelDescriptor e = surfel_descriptor(grid, *edge, 0.05);
+  EXPECT_NEAR(e(11), 3.0 / 8.0, 1e-9);  // 3 of its 8 neighbours lie in x >= 0.2
+  EXPECT_NEAR(e(10), 5.0 / 8.0, 1e-9);
 }
 
 }  // namespace
