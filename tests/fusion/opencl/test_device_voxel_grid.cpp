@@ -11,6 +11,7 @@
 #include "datasets/synthetic_sequence.h"
 #include "fusion/integrate.h"
 #include "registration/opencl/opencl_context.h"
+#include "slam/pipeline.h"
 
 namespace hf::fusion {
 namespace {
@@ -215,6 +216,46 @@ TEST(DeviceVoxelGrid, BadFrameAndOversizedPoolAreTypedErrors) {
   EXPECT_THROW(device.integrate(wrong, ColorImage(), camera, SE3::identity()), Error);
   VolumeParams huge = params_1cm(size_t(1) << 26);  // 256 GiB of voxels
   EXPECT_THROW(DeviceVoxelGrid(huge, ctx), DeviceMemoryError);
+}
+
+// The pipeline with backend opencl (integrate on the device, the host map following it) against backend cpu on
+// the same synthetic frames: with ground-truth poses the maps are the same bit for bit; tracked (combined), the
+// poses differ only by the float reductions' order (tolerance 0.1 mm, 1e-4 rad: far below one voxel).
+TEST(DeviceVoxelGrid, PipelineOnTheDeviceMatchesTheCpuPipeline) {
+  HF_CONTEXT_OR_SKIP(ctx);
+  const PinholeCamera camera = small_camera();
+  const auto seq = room(4);
+  for (const std::string registration : {"groundtruth", "combined"}) {
+    std::vector<SE3> poses[2];
+    VoxelBlockGrid maps[2] = {VoxelBlockGrid(params_1cm()), VoxelBlockGrid(params_1cm())};
+    for (int b = 0; b < 2; ++b) {
+      slam::PipelineConfig config;
+      config.registration = registration;
+      config.backend = b == 0 ? "cpu" : "opencl";
+      config.volume = params_1cm();
+      slam::Pipeline pipeline(config, camera);
+      for (int i = 0; i < 4; ++i) {
+        const auto f = seq.frame(i);
+        RgbdFrame frame;
+        frame.index = size_t(i);
+        frame.depth = f.depth;
+        frame.color = f.color;
+        frame.T_world_camera_gt = f.T_world_camera;
+        const slam::FrameResult r = pipeline.process(frame);
+        ASSERT_TRUE(r.integrated) << registration << " frame " << i;
+        poses[b].push_back(r.T_world_camera);
+      }
+      const auto devices = pipeline.stage_devices();
+      EXPECT_EQ(devices.at("integrate"), b == 0 ? "cpu" : ctx->info().platform_name + " / " + ctx->info().device_name);
+      EXPECT_EQ(devices.at("raycast"), "cpu");
+      for (const auto& [c, block] : pipeline.map().blocks()) *maps[b].allocate(c) = *block;
+    }
+    for (size_t i = 0; i < poses[0].size(); ++i) {
+      EXPECT_LT((poses[0][i].translation() - poses[1][i].translation()).norm(), 1e-4) << registration << " " << i;
+      EXPECT_LT(Eigen::AngleAxisd(poses[0][i].rotation().transpose() * poses[1][i].rotation()).angle(), 1e-4);
+    }
+    if (registration == "groundtruth") expect_agreement(maps[0], maps[1], ctx->info().has_fp64);
+  }
 }
 
 }  // namespace
