@@ -139,7 +139,8 @@ void BM_FocusDensity(benchmark::State& state) {
   View* v = view(int(state.range(0)));
   if (!v) return state.SkipWithError("../shared/data/tum_fr1_rpy_first150 absent");
   const int w = v->camera.width, h = v->camera.height;
-  const Image<float> density = focus_density(w, h, 0.5f * (w - 1), 0.5f * (h - 1), 80.0f, float(state.range(1)) / 100.0f);
+  const float floor = float(state.range(1)) / 100.0f;
+  const Image<float> density = focus_density(w, h, 0.5f * (w - 1), 0.5f * (h - 1), 80.0f, floor);
   run_masked(state, *v, as_image(w, h, halton_mask(density)), Reconstruction::push_pull);
 }
 BENCHMARK(BM_FocusDensity)

@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """Issue 19, depth holes: ATE of `hashfusion run` with the tracking depth's push-pull hole fill off and on.
 
-  python3 bench/fewer_rays_depth_holes.py --out out/depth_holes [--levels 0,1,2,3] [--inputs rpy0,rpy150,desk,7scenes,holes]
+  python3 bench/fewer_rays_depth_holes.py --out out/depth_holes [--levels 0,1,2,3]
+                                          [--inputs rpy0,rpy150,desk,7scenes,holes]
 
-Each level L is a `--config` file {"pyramid": {"fill_holes_levels": L}} (0 = off, the default; registration/frame_pyramid.h).
+Each level L is a `--config` file {"pyramid": {"fill_holes_levels": L}} (0 = off, the default;
+registration/frame_pyramid.h).
 The `holes` synthetic preset (the room with 30 % of the depth missing in blobs) is generated once into OUT/holes
 (`hashfusion generate --preset holes --frames 90 --seed 1`) and replayed like a real sequence; real inputs come from
 ../shared/data (skipped when absent). Prints one markdown table (ATE RMSE cm, frames lost, preprocess ms, fps) and

@@ -47,7 +47,8 @@ MapPoint SamplingMap::uniform_node(int i, int j) const {
 }
 
 SamplingMap SamplingMap::identity(int width, int height, int cells_x, int cells_y) {
-  return from_region_rates(width, height, cells_x, cells_y, std::vector<float>(size_t(std::max(0, cells_x * cells_y)), 1.0f));
+  const std::vector<float> ones(size_t(std::max(0, cells_x * cells_y)), 1.0f);
+  return from_region_rates(width, height, cells_x, cells_y, ones);
 }
 
 SamplingMap SamplingMap::from_region_rates(int width, int height, int cells_x, int cells_y,
@@ -83,7 +84,8 @@ SamplingMap SamplingMap::from_region_rates(int width, int height, int cells_x, i
   const std::vector<double> ev = edges(row, double(height) / cells_y, &conus_height);
   std::vector<MapPoint> nodes(size_t(cells_x + 1) * (cells_y + 1));
   for (int j = 0; j <= cells_y; ++j)
-    for (int i = 0; i <= cells_x; ++i) nodes[size_t(j) * (cells_x + 1) + i] = {float(eu[size_t(i)]), float(ev[size_t(j)])};
+    for (int i = 0; i <= cells_x; ++i)
+      nodes[size_t(j) * (cells_x + 1) + i] = {float(eu[size_t(i)]), float(ev[size_t(j)])};
   return from_nodes(width, height, conus_width, conus_height, cells_x, cells_y, std::move(nodes));
 }
 
@@ -212,7 +214,8 @@ float sample_clamped(const Image<float>& img, float x, float y) {
 Image<float> to_conus(const Image<float>& uniform, const SamplingMap& map) {
   if (uniform.width() != map.width() || uniform.height() != map.height())
     throw Error("to_conus: image " + std::to_string(uniform.width()) + "x" + std::to_string(uniform.height()) +
-                " does not match the sampling map's " + std::to_string(map.width()) + "x" + std::to_string(map.height()));
+                " does not match the sampling map's " + std::to_string(map.width()) + "x" +
+                std::to_string(map.height()));
   const std::vector<MapPoint> rays = map.rays();
   Image<float> out(map.conus_width(), map.conus_height());
   for (size_t p = 0; p < rays.size(); ++p) out.pixels()[p] = sample_clamped(uniform, rays[p].u, rays[p].v);

@@ -37,7 +37,8 @@ class SamplingMap {
   // tensor product of a column rate (the largest rate in the column) and a row rate (the largest in the row), so
   // every region gets at least its rate; the CoNUS image is sum(column rates) x sum(row rates) cells wide and
   // high, rounded to whole pixels (at least 1).
-  static SamplingMap from_region_rates(int width, int height, int cells_x, int cells_y, const std::vector<float>& rates);
+  static SamplingMap from_region_rates(int width, int height, int cells_x, int cells_y,
+                                       const std::vector<float>& rates);
 
   // Explicit distorted nodes ((cells_x + 1) (cells_y + 1), row-major), e.g. from the paper's mass-spring system or
   // a linear combination of maps. Validated as above.

@@ -55,8 +55,8 @@ PushPullResult PushPullOpenCl::fill(int width, int height, int channels, float* 
     const size_t n0 = size_t(width) * height;
     q.enqueueWriteBuffer(level_values[0], CL_FALSE, 0, n0 * channels * sizeof(float), values);
     q.enqueueWriteBuffer(level_masks[0], CL_FALSE, 0, n0, mask);
-    for (int l = 0; l < L; ++l) {
-      cl::Kernel& k = state_->push;
+    // Both kernels take (level l values, mask, width, height, channels, level l + 1 values, mask).
+    auto enqueue = [&](cl::Kernel& k, int l, const cl::NDRange& range) {
       k.setArg(0, level_values[l]);
       k.setArg(1, level_masks[l]);
       k.setArg(2, levels[l].width);
@@ -64,19 +64,10 @@ PushPullResult PushPullOpenCl::fill(int width, int height, int channels, float* 
       k.setArg(4, channels);
       k.setArg(5, level_values[l + 1]);
       k.setArg(6, level_masks[l + 1]);
-      q.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(levels[l + 1].width, levels[l + 1].height));
-    }
-    for (int l = L - 1; l >= 0; --l) {
-      cl::Kernel& k = state_->pull;
-      k.setArg(0, level_values[l]);
-      k.setArg(1, level_masks[l]);
-      k.setArg(2, levels[l].width);
-      k.setArg(3, levels[l].height);
-      k.setArg(4, channels);
-      k.setArg(5, level_values[l + 1]);
-      k.setArg(6, level_masks[l + 1]);
-      q.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(levels[l].width, levels[l].height));
-    }
+      q.enqueueNDRangeKernel(k, cl::NullRange, range);
+    };
+    for (int l = 0; l < L; ++l) enqueue(state_->push, l, cl::NDRange(levels[l + 1].width, levels[l + 1].height));
+    for (int l = L - 1; l >= 0; --l) enqueue(state_->pull, l, cl::NDRange(levels[l].width, levels[l].height));
     q.enqueueReadBuffer(level_values[0], CL_FALSE, 0, n0 * channels * sizeof(float), values);
     q.enqueueReadBuffer(level_masks[0], CL_TRUE, 0, n0, mask);
   } catch (const Error&) {
