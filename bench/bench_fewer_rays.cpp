@@ -7,6 +7,8 @@
 //   BM_FocusDensity:  render_masked on a Halton mask following focus_density (full rate within 80 px of the
 //                     centre, (80 / r)^2 outside, floor range(1) %), push-pull
 //   BM_FocusContext:  render_focus_context, the centre 320x240 at full rate, the context at level range(1)
+//   BM_Conus:         render_conus through a sampling map, the centre 160x160 at full rate, the context at
+//                     range(1) % (linear rate)
 // range(0) = 0 the synthetic room, 1 TUM fr1/rpy. Counters: ssim (core/ssim.h, on luma), rays_fraction, cast_ms,
 // reconstruct_ms. Results in bench/results/fewer_rays_render.md.
 //   build/release/bench/bench_fewer_rays --benchmark_min_time=0.5
@@ -165,6 +167,28 @@ void BM_FocusContext(benchmark::State& state) {
 BENCHMARK(BM_FocusContext)
     ->ArgNames({"scene", "context_level"})
     ->ArgsProduct({{0, 1}, {1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Popescu's CoNUS view: 16x12 cells, the centre 4x4 cells at full rate, the others at range(1) / 100.
+void BM_Conus(benchmark::State& state) {
+  View* v = view(int(state.range(0)));
+  if (!v) return state.SkipWithError("../shared/data/tum_fr1_rpy_first150 absent");
+  std::vector<float> rates(16 * 12, float(state.range(1)) / 100.0f);
+  for (int j = 4; j < 8; ++j)
+    for (int i = 6; i < 10; ++i) rates[size_t(j) * 16 + i] = 1.0f;
+  const SamplingMap map = SamplingMap::from_region_rates(v->camera.width, v->camera.height, 16, 12, rates);
+  SparseRender r;
+  double cast = 0, rec = 0;
+  for (auto _ : state) {
+    r = render_conus(v->map(), v->camera, v->T_world_camera, render_options(), map);
+    cast += r.cast_ms, rec += r.reconstruct_ms;
+  }
+  report(state, *v, r, cast, rec);
+}
+BENCHMARK(BM_Conus)
+    ->ArgNames({"scene", "context_rate_percent"})
+    ->ArgsProduct({{0, 1}, {50, 25}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

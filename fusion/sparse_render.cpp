@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -96,6 +97,41 @@ SparseRender render_focus_context(const VoxelBlockGrid& grid, const PinholeCamer
       out.shaded(x, y) = to_rgb8(rgb);
     }
   });
+  out.reconstruct_ms = ms_since(t0);
+  return out;
+}
+
+SparseRender render_conus(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
+                          RaycastOptions options, const SamplingMap& map) {
+  if (map.width() != camera.width || map.height() != camera.height)
+    throw Error("render_conus: the sampling map is for " + std::to_string(map.width()) + "x" +
+                std::to_string(map.height()) + " images but the camera is " + camera.describe());
+  options.shade = true;
+  SparseRender out;
+  auto t0 = std::chrono::steady_clock::now();
+  const std::vector<MapPoint> rays = map.rays();
+  auto pixel_of = [&](const MapPoint& p) {
+    const int x = std::clamp(int(std::lround(p.u)), 0, camera.width - 1);
+    const int y = std::clamp(int(std::lround(p.v)), 0, camera.height - 1);
+    return size_t(y) * camera.width + x;
+  };
+  Image<std::uint8_t> mask(camera.width, camera.height, 0);
+  for (const MapPoint& p : rays) mask.pixels()[pixel_of(p)] = 1;
+  RaycastResult cast;
+  raycast_sampled(grid, camera, T_world_camera, options, mask, &cast);
+  for (std::uint8_t m : mask.pixels()) out.rays += m;
+  out.cast_ms = ms_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  out.conus = Image<float>(map.conus_width(), map.conus_height());
+  for (size_t i = 0; i < rays.size(); ++i) out.conus.pixels()[i] = cast.shaded.pixels()[pixel_of(rays[i])].r;
+  const Image<float> uniform = from_conus(out.conus, map);
+  out.shaded = ColorImage(camera.width, camera.height);
+  for (size_t i = 0; i < uniform.size(); ++i) {
+    const float v = uniform.pixels()[i];
+    const float rgb[3] = {v, v, v};
+    out.shaded.pixels()[i] = to_rgb8(rgb);
+  }
   out.reconstruct_ms = ms_since(t0);
   return out;
 }

@@ -79,6 +79,30 @@ TEST(SparseRender, FewerRaysGiveAWholeImage) {
     for (int x = roi.x0; x < roi.x1; ++x) ASSERT_NEAR(f.shaded(x, y).r, r.full(x, y).r, 1) << x << "," << y;
 }
 
+TEST(SparseRender, CoNUSViewThroughASamplingMap) {
+  const Room& r = room();
+  // Rates 1 everywhere: the CoNUS image is the full render.
+  const SparseRender id = render_conus(r.grid, r.camera, r.T_world_camera, RaycastOptions{},
+                                       SamplingMap::identity(r.camera.width, r.camera.height, 8, 6));
+  EXPECT_EQ(id.rays, long(r.camera.width) * r.camera.height);
+  EXPECT_EQ(id.shaded.pixels(), r.full.pixels());
+  // 20x20-pixel cells, the 2x2 centre cells (x 60..99, y 40..79) at full rate, the rest at half: a 100x80 CoNUS
+  // image. The centre is sampled one ray per pixel, so it reads as the full render there.
+  std::vector<float> rates(48, 0.5f);
+  for (int j = 2; j < 4; ++j)
+    for (int i = 3; i < 5; ++i) rates[size_t(j) * 8 + i] = 1.0f;
+  const SamplingMap map = SamplingMap::from_region_rates(r.camera.width, r.camera.height, 8, 6, rates);
+  const SparseRender c = render_conus(r.grid, r.camera, r.T_world_camera, RaycastOptions{}, map);
+  EXPECT_EQ(c.conus.width(), 100);
+  EXPECT_EQ(c.conus.height(), 80);
+  EXPECT_LE(c.rays, 100L * 80L);
+  EXPECT_GT(c.rays, 100L * 80L * 9 / 10);  // distinct pixels: only snapping may merge rays
+  for (int y = 41; y < 79; ++y)
+    for (int x = 61; x < 99; ++x) ASSERT_NEAR(c.shaded(x, y).r, r.full(x, y).r, 1) << x << "," << y;
+  EXPECT_THROW(render_conus(r.grid, r.camera, r.T_world_camera, RaycastOptions{}, SamplingMap::identity(8, 8, 2, 2)),
+               Error);
+}
+
 TEST(SparseRender, BadArgumentsThrow) {
   const Room& r = room();
   EXPECT_THROW(render_masked(r.grid, r.camera, r.T_world_camera, RaycastOptions{}, Image<std::uint8_t>(4, 4, 1),
