@@ -34,6 +34,7 @@
 #include "registration/frame_pyramid.h"
 #include "registration/cpu_backend.h"
 #include "registration/gauss_newton.h"
+#include "registration/ndt/ndt_options.h"
 #include "registration/registration.h"
 #ifdef HF_BENCH_HAVE_OPENCL
 #include "registration/opencl/opencl_backend.h"
@@ -361,6 +362,25 @@ void BM_Align(benchmark::State& state, const std::string& method, const std::str
     state.counters["it_l" + std::to_string(l)] = double(res.iterations_per_level[l]);
   }
 }
+
+// The NDT methods' cell model of one frame alone (issue 17: Stoyanov found it costlier than the registration),
+// to read against BM_Align of the same method, which includes it: the reference frame of the pair at the
+// pipeline's 320x240 (first_level 1), sampled and built with the method's default resolutions and point stride.
+// ndt-p2d builds it for the reference, ndt-d2d and mrsmap for both frames (twice this).
+void BM_NdtCellModel(benchmark::State& state, const std::string& method) {
+  const RegistrationOptions options = default_registration_options(method);
+  const NdtOptions& o = options.method_as<NdtOptions>();
+  const Pair& p = bench_pair(1);
+  size_t cells = 0;
+  for (auto _ : state) {
+    const NdtSamples samples = sample_ndt(p.ref.levels[0], o.point_stride);
+    const NdtModel model = build_ndt_model(samples.points, o.resolutions_m(), o.grid);
+    cells = model.levels.back().size();
+  }
+  state.counters["finest_cells"] = double(cells);
+}
+BENCHMARK_CAPTURE(BM_NdtCellModel, ndt_p2d, std::string("ndt-p2d"))->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_NdtCellModel, ndt_d2d, std::string("ndt-d2d"))->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // One reduction (one Gauss-Newton iteration's normal equations) at pyramid level `level` of the 640x480 pair for a
 // registered per-pixel method, inputs already on the device. Its default options except: photometric rows on every
