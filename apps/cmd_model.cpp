@@ -18,7 +18,7 @@ namespace {
 
 struct ModelArgs {
   std::string shots, polygons, out, cloud, dataset;
-  bool all_frames = false, snap = false, no_textures = false, no_overlays = false;
+  bool all_frames = false, snap = false, transfer = false, no_textures = false, no_overlays = false;
   double acceptance_h = photogrammetry::CloudFitOptions{}.acceptance_h;
   double ransac_threshold = 0.0;
   int texture_px = photogrammetry::TextureOptions{}.max_texture_px;
@@ -40,6 +40,7 @@ void run_model(const ModelArgs& a) {
   o.model.fit.acceptance_h = a.acceptance_h;
   o.model.ransac.distance_threshold = a.ransac_threshold;
   o.snap = a.snap;
+  o.transfer = a.transfer;
   o.textures = !a.no_textures;
   o.overlays = !a.no_overlays;
   o.texture.max_texture_px = a.texture_px;
@@ -49,6 +50,15 @@ void run_model(const ModelArgs& a) {
   for (const auto& p : r.model.polygons)
     std::cout << "  " << p.id << ": " << to_string(p.decision.state) << " (" << to_string(p.decision.method)
               << "): " << p.decision.reason << "\n";
+  for (const auto& t : r.transfers) {
+    const photogrammetry::TransferResult& x = t.result;
+    std::cout << "  " << sketch.polygons[t.polygon].id << " -> " << t.shot << ": transferred, "
+              << (x.anchor_edge >= 0 ? "edge " + std::to_string(x.anchor_edge) + " matched (similarity " +
+                                           std::to_string(x.anchor_similarity) + ")"
+                                     : std::string("no edge matched (plane projection, snapped)"))
+              << "\n";
+  }
+  if (a.transfer) std::cout << "  " << r.transfers.size() << " transferred views in transferred.json\n";
   std::cout << "outputs in " << a.out << " (polygons.json, model.obj, " << r.written.size() << " files)\n";
 }
 
@@ -70,6 +80,9 @@ void add_model_command(CLI::App& app) {
   cmd->add_option("--dataset", a->dataset, "a run's TUM folder when report.json's \"input\" has moved");
   cmd->add_flag("--all-frames", a->all_frames, "a run: every tracked frame is a shot, not only keyframes");
   cmd->add_flag("--snap", a->snap, "snap sketched edges to LSD line segments of the shots (section 5.2)");
+  cmd->add_flag("--transfer", a->transfer,
+                "transfer each polygon sketched in one shot and placed on a plane into the other shots that see it "
+                "(section 5.2, edge colour histograms): transferred.json, a sketch to run model on again");
   cmd->add_option("--acceptance", a->acceptance_h, "acceptance threshold of the cloud fit h = m r / n")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();

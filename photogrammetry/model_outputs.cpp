@@ -125,6 +125,58 @@ std::string format_polygons_json(const Model& model, const std::vector<std::stri
   return json{{"polygons", polygons}}.dump(2) + "\n";
 }
 
+std::string format_sketch_json(const Sketch& sketch) {
+  json polygons = json::array();
+  for (const SketchPolygon& p : sketch.polygons) {
+    json views = json::array();
+    for (const SketchView& v : p.views) {
+      json points = json::array();
+      for (const auto& q : v.points) points.push_back({q.x(), q.y()});
+      views.push_back({{"shot", v.shot}, {"points", points}});
+    }
+    json j{{"id", p.id}, {"views", views}};
+    if (!p.same_plane_as.empty()) j["same_plane_as"] = p.same_plane_as;
+    polygons.push_back(j);
+  }
+  return json{{"polygons", polygons}}.dump(2) + "\n";
+}
+
+namespace {
+
+// Section 5.2's transfer for every polygon sketched once and placed on a plane, into each other shot that sees the
+// placed polygon inside its image. `image` loads (and caches) a shot's image; `lines` a shot's LSD segments.
+template <class Image, class Lines>
+std::vector<TransferredView> transfer_single_views(const Network& network, const Sketch& sketch, const Model& model,
+                                                   const TransferOptions& options, Image image, Lines lines) {
+  std::vector<TransferredView> out;
+  for (size_t i = 0; i < sketch.polygons.size(); ++i) {
+    const SketchPolygon& p = sketch.polygons[i];
+    const ModelledPolygon& m = model.polygons[i];
+    if (p.views.size() != 1 || m.vertices.empty() || !m.plane) continue;
+    const size_t source = size_t(network.shot_index(p.views[0].shot));
+    if (!network.shots[source].image_available) continue;
+    for (size_t t = 0; t < network.shots.size(); ++t) {
+      const Shot& target = network.shots[t];
+      if (t == source || !target.image_available) continue;
+      bool inside = true;
+      for (const auto& X : m.vertices) {
+        const auto uv = target.project(X);
+        inside = inside && uv && target.in_image(*uv);
+      }
+      if (!inside) continue;
+      const auto r = transfer_polygon(network.shots[source], *image(source), p.views[0].points, *m.plane, target,
+                                      *image(t), lines(t), options);
+      if (!r) continue;
+      bool kept = true;  // a snap may push a vertex out of the image: SKETCH.json would refuse it
+      for (const auto& uv : r->points) kept = kept && target.in_image(uv);
+      if (kept) out.push_back({i, target.name, *r});
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 ModelJobResult run_model_job(const Network& network, const Sketch& input_sketch, const std::string& sketch_name,
                              const std::string& out_dir, const ModelJobOptions& o) {
   check_sketch_shots(input_sketch, network, sketch_name);
@@ -142,14 +194,17 @@ ModelJobResult run_model_job(const Network& network, const Sketch& input_sketch,
     for (const SketchPolygon& p : input_sketch.polygons)
       for (const SketchView& v : p.views) image(size_t(network.shot_index(v.shot)));
   Sketch sketch = input_sketch;
-  std::map<size_t, std::vector<LineSegment2>> lines;  // per snapped shot, its LSD segments
+  std::map<size_t, std::vector<LineSegment2>> lines;  // per snapped or transferred-into shot, its LSD segments
+  const auto shot_lines = [&](size_t s) -> const std::vector<LineSegment2>& {
+    if (!lines.count(s)) lines[s] = detect_line_segments(*image(s));
+    return lines[s];
+  };
   if (o.snap) {
     for (SketchPolygon& p : sketch.polygons) {
       result.snaps.emplace_back();
       for (SketchView& v : p.views) {
         const size_t s = size_t(network.shot_index(v.shot));
-        if (!lines.count(s)) lines[s] = detect_line_segments(*image(s));
-        result.snaps.back().push_back(snap_polygon(v.points, lines[s], o.snapping));
+        result.snaps.back().push_back(snap_polygon(v.points, shot_lines(s), o.snapping));
         v.points = result.snaps.back().back().points;
       }
     }
@@ -174,6 +229,12 @@ ModelJobResult run_model_job(const Network& network, const Sketch& input_sketch,
       if (textures[i]) texture_names[i] = "textures/" + names[i] + ".png";
     }
   }
+  Sketch transferred = sketch;
+  if (o.transfer) {
+    result.transfers = transfer_single_views(network, sketch, model, o.transferring, image, shot_lines);
+    for (const TransferredView& t : result.transfers)
+      transferred.polygons[t.polygon].views.push_back({t.shot, t.result.points});
+  }
   const auto written = [&](const std::string& path) { result.written.push_back(path); };
   const std::string out = fs::path(out_dir).string();
   const std::string polygons_path = (fs::path(out) / "polygons.json").string();
@@ -184,6 +245,11 @@ ModelJobResult run_model_job(const Network& network, const Sketch& input_sketch,
   written(obj);
   write_file_atomically(mtl, [&](std::ostream& os) { os << mtl_text(textures, names); });
   written(mtl);
+  if (o.transfer) {
+    const std::string path = (fs::path(out) / "transferred.json").string();
+    write_file_atomically(path, [&](std::ostream& os) { os << format_sketch_json(transferred); });
+    written(path);
+  }
   for (size_t i = 0; i < textures.size(); ++i)
     if (textures[i]) {
       fs::create_directories(fs::path(out) / "textures");
@@ -196,7 +262,7 @@ ModelJobResult run_model_job(const Network& network, const Sketch& input_sketch,
     for (size_t s = 0; s < network.shots.size(); ++s) {
       const Shot& shot = network.shots[s];
       bool sketched = false;
-      for (const SketchPolygon& p : sketch.polygons)
+      for (const SketchPolygon& p : transferred.polygons)
         for (const SketchView& v : p.views) sketched = sketched || v.shot == shot.name;
       std::vector<std::pair<Polygon2d, Guidance>> projected;
       for (const ModelledPolygon& p : model.polygons) {
@@ -229,6 +295,8 @@ ModelJobResult run_model_job(const Network& network, const Sketch& input_sketch,
                          {230, 120, 20}, thick, cv::LINE_AA);
               }
         }
+      for (const TransferredView& t : result.transfers)
+        if (t.shot == shot.name) polyline(m, t.result.points, {230, 40, 230}, thick);
       for (const auto& [q, g] : projected) polyline(m, q, guidance_bgr(g), 2 * thick);
       fs::create_directories(fs::path(out) / "overlays");
       const std::string path = (fs::path(out) / "overlays" / (fs::path(shot.name).stem().string() + ".png")).string();

@@ -7,7 +7,12 @@
 //   model.obj + model.mtl + textures/*.png   the placed polygons, one OBJ face each, textured from the best shot
 //                  per texel (photogrammetry/texture.h); polygons no shot sees are written untextured.
 //   overlays/SHOT.png  per shot that a polygon is sketched in or projects into: the photo, the sketch (white), the
-//                  matched image lines of snapping (blue) and the reprojected 3D polygons in their guidance colour.
+//                  matched image lines of snapping (blue), transferred outlines (magenta) and the reprojected 3D
+//                  polygons in their guidance colour.
+//   transferred.json  with `transfer` (section 5.2's multi-shot mode, photogrammetry/polygon_transfer.h): the sketch
+//                  (SKETCH.json's format) with, for each polygon sketched in one shot and placed on a plane, its
+//                  outline transferred into every other shot whose image is available and that sees the placed
+//                  polygon wholly inside its image; run `model` on it to fix those polygons by DLT over the shots.
 // Every file is written atomically (core/atomic_file.h); the folder is checked writable before any work.
 // Failure modes: hf::Error naming the file for unreadable inputs (a missing image of a sketched shot included).
 #pragma once
@@ -17,6 +22,7 @@
 
 #include "photogrammetry/edge_snapping.h"
 #include "photogrammetry/polygon_modelling.h"
+#include "photogrammetry/polygon_transfer.h"
 #include "photogrammetry/texture.h"
 
 namespace hf::photogrammetry {
@@ -28,13 +34,25 @@ struct ModelJobOptions {
   bool textures = true;
   TextureOptions texture;
   bool overlays = true;
+  bool transfer = false;  // transferred.json (see above)
+  TransferOptions transferring;
+};
+
+struct TransferredView {
+  size_t polygon = 0;  // index into the sketch
+  std::string shot;    // the target shot's name
+  TransferResult result;
 };
 
 struct ModelJobResult {
   Model model;
   std::vector<std::vector<SnapResult>> snaps;  // per polygon, per view (empty without snapping)
+  std::vector<TransferredView> transfers;      // with `transfer`, in the sketch's order
   std::vector<std::string> written;            // paths, in the order written
 };
+
+// SKETCH.json's text for a sketch (photogrammetry/sketch.h): parse_sketch reads it back unchanged.
+std::string format_sketch_json(const Sketch& sketch);
 
 // polygons.json's text for a model.
 std::string format_polygons_json(const Model& model, const std::vector<std::string>& texture_names = {});

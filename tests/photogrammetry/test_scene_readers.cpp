@@ -11,6 +11,7 @@
 #include "io/image_io.h"
 #include "io/ply.h"
 #include "io/trajectory_io.h"
+#include "photogrammetry/model_outputs.h"
 #include "photogrammetry/scene_mvs.h"
 #include "photogrammetry/scene_readers.h"
 #include "photogrammetry/sketch.h"
@@ -172,6 +173,18 @@ TEST(Sketch, ParsesAndChecksStructure) {
   ASSERT_EQ(s.polygons.size(), 2u);
   EXPECT_EQ(s.polygons[0].views[1].points[2], Eigen::Vector2d(11, 10));
   EXPECT_EQ(s.polygons[1].same_plane_as, "p0");
+  // What `model --transfer` writes (transferred.json) reads back as the same sketch.
+  const Sketch again = parse_sketch(format_sketch_json(s), "t.json");
+  ASSERT_EQ(again.polygons.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(again.polygons[i].id, s.polygons[i].id);
+    EXPECT_EQ(again.polygons[i].same_plane_as, s.polygons[i].same_plane_as);
+    ASSERT_EQ(again.polygons[i].views.size(), s.polygons[i].views.size());
+    for (size_t k = 0; k < s.polygons[i].views.size(); ++k) {
+      EXPECT_EQ(again.polygons[i].views[k].shot, s.polygons[i].views[k].shot);
+      EXPECT_EQ(again.polygons[i].views[k].points, s.polygons[i].views[k].points);
+    }
+  }
   const auto bad = [](const std::string& t) { return error_of([&] { parse_sketch(t, "s.json"); }); };
   EXPECT_EQ(bad(R"({"polygons": [{"id": "p", "views": [{"shot": "a", "points": [[0,0],[10,10],[10,0],[0,10]]}]}]})"),
             "s.json: polygon 'p' view 1: the outline intersects itself (or repeats a vertex)");
