@@ -652,8 +652,8 @@ std::map<std::string, std::string> Pipeline::stage_devices() const {
 #ifdef HF_HAVE_FUSION_OPENCL
   if (device_map_) d["integrate"] = device_map_->device_name();
   if (config_.backend == "opencl" && registration_) {
-    const opencl::DeviceInfo& info = opencl::Context::shared()->info();
-    d["registration"] = info.platform_name + " / " + info.device_name;  // the reductions
+    const auto context = opencl::Context::shared();  // the backends' (they hold it)
+    d["registration"] = context->info().platform_name + " / " + context->info().device_name;  // the reductions
   }
 #else
   if (config_.backend == "opencl" && registration_) d["registration"] = "opencl";
