@@ -23,13 +23,14 @@
 #include <memory>
 #include <vector>
 
+#include "bench/room_frames.h"
 #include "datasets/synthetic_sequence.h"
 #include "fusion/deintegrate.h"
 #include "fusion/integrate.h"
 
 namespace {
 
-constexpr int kFrames = 24;
+constexpr int kFrames = hf::bench::kRoomFrames;
 
 // CPU seconds used by the whole process (all threads): with other jobs on the machine, wall time per frame
 // depends on the load, the CPU time spent on the frame much less.
@@ -40,23 +41,8 @@ double process_cpu_s() {
 }
 constexpr int kWarmupFrames = 8;
 
-const std::vector<hf::datasets::SyntheticFrame>& room_frames() {
-  static const std::vector<hf::datasets::SyntheticFrame> frames = [] {
-    hf::datasets::SyntheticOptions options;
-    options.preset = "room";
-    options.frames = 300;
-    const hf::datasets::SyntheticSequence seq(options);
-    std::vector<hf::datasets::SyntheticFrame> out;
-    for (int i = 0; i < kFrames; ++i) out.push_back(seq.frame(i * 4));  // every 4th frame: 7.5 Hz of motion
-    return out;
-  }();
-  return frames;
-}
-
-const hf::PinholeCamera& room_camera() {
-  static const hf::PinholeCamera camera = hf::PinholeCamera::preset("ros");
-  return camera;
-}
+using hf::bench::room_camera;
+using hf::bench::room_frames;
 
 // Parallel STREAM copy; returns bytes/s (2 x 8 bytes per element).
 double stream_copy_bandwidth(int repetitions) {

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/room_frames.h"
 #include "datasets/synthetic_sequence.h"
 #include "fusion/integrate.h"
 #include "fusion/opencl/device_voxel_grid.h"
@@ -33,27 +34,12 @@ std::string_view fusion_program_source();
 
 namespace {
 
-constexpr int kFrames = 24;
+constexpr int kFrames = hf::bench::kRoomFrames;
 constexpr int kWarmupFrames = 8;
 constexpr int kPipelineFrames = 20;
 
-const std::vector<hf::datasets::SyntheticFrame>& room_frames() {
-  static const std::vector<hf::datasets::SyntheticFrame> frames = [] {
-    hf::datasets::SyntheticOptions options;
-    options.preset = "room";
-    options.frames = 300;
-    const hf::datasets::SyntheticSequence seq(options);
-    std::vector<hf::datasets::SyntheticFrame> out;
-    for (int i = 0; i < kFrames; ++i) out.push_back(seq.frame(i * 4));  // every 4th frame: 7.5 Hz of motion
-    return out;
-  }();
-  return frames;
-}
-
-const hf::PinholeCamera& room_camera() {
-  static const hf::PinholeCamera camera = hf::PinholeCamera::preset("ros");
-  return camera;
-}
+using hf::bench::room_camera;
+using hf::bench::room_frames;
 
 hf::fusion::VolumeParams volume_1cm() {
   hf::fusion::VolumeParams params;

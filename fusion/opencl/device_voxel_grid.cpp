@@ -42,6 +42,13 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 
 size_t round_up(size_t n, size_t m) { return (n + m - 1) / m * m; }
 
+// kernel.setArg(0, args[0]), setArg(1, args[1]), ...
+template <class... Args>
+void set_args(cl::Kernel& kernel, const Args&... args) {
+  cl_uint i = 0;
+  (kernel.setArg(i++, args), ...);
+}
+
 // integrate.cl's hf_block_home (BlockHashTable's home entry).
 std::uint32_t block_home(int x, int y, int z, int shift) {
   const std::uint64_t k = (std::uint64_t(std::uint32_t(x)) * 0x9E3779B97F4A7C15ull) ^
@@ -242,13 +249,7 @@ IntegrateStats DeviceVoxelGrid::integrate(const DepthImage& depth, const ColorIm
 
     // Phase 1: bands, look-up, creation.
     const int W = depth.width(), H = depth.height();
-    m.bands.setArg(0, m.depth);
-    m.bands.setArg(1, W);
-    m.bands.setArg(2, H);
-    m.bands.setArg(3, m.constants);
-    m.bands.setArg(4, m.list);
-    m.bands.setArg(5, cl_uint(m.list_capacity));
-    m.bands.setArg(6, m.counters);
+    set_args(m.bands, m.depth, W, H, m.constants, m.list, cl_uint(m.list_capacity), m.counters);
     q.enqueueNDRangeKernel(m.bands, cl::NullRange, cl::NDRange(size_t(W), size_t(H)));
     c = m.read_counters();
     if (c[kError] & kErrorList) throw Error(m.where() + ": the frame's block list overflowed (internal error)");
@@ -256,29 +257,11 @@ IntegrateStats DeviceVoxelGrid::integrate(const DepthImage& depth, const ColorIm
     stats.pixels_used = c[kPixels];
     if (emitted > 0) {
       const cl_uint mask = cl_uint(m.entries - 1);
-      m.find.setArg(0, m.list);
-      m.find.setArg(1, emitted);
-      m.find.setArg(2, m.table);
-      m.find.setArg(3, mask);
-      m.find.setArg(4, m.shift);
-      m.find.setArg(5, m.options.max_probe);
-      m.find.setArg(6, m.stamps);
-      m.find.setArg(7, cl_uint(m.frame_stamp));
-      m.find.setArg(8, m.visible);
-      m.find.setArg(9, m.missing);
-      m.find.setArg(10, m.counters);
+      set_args(m.find, m.list, emitted, m.table, mask, m.shift, m.options.max_probe, m.stamps,
+               cl_uint(m.frame_stamp), m.visible, m.missing, m.counters);
       q.enqueueNDRangeKernel(m.find, cl::NullRange, cl::NDRange(size_t(emitted)));
-      m.create.setArg(0, m.list);
-      m.create.setArg(1, m.missing);
-      m.create.setArg(2, m.table);
-      m.create.setArg(3, mask);
-      m.create.setArg(4, m.shift);
-      m.create.setArg(5, m.options.max_probe);
-      m.create.setArg(6, m.stamps);
-      m.create.setArg(7, cl_uint(m.frame_stamp));
-      m.create.setArg(8, m.visible);
-      m.create.setArg(9, cl_uint(params_.capacity_blocks));
-      m.create.setArg(10, m.counters);
+      set_args(m.create, m.list, m.missing, m.table, mask, m.shift, m.options.max_probe, m.stamps,
+               cl_uint(m.frame_stamp), m.visible, cl_uint(params_.capacity_blocks), m.counters);
       q.enqueueNDRangeKernel(m.create, cl::NullRange, cl::NDRange(1));
       c = m.read_counters();
     }
@@ -306,21 +289,11 @@ IntegrateStats DeviceVoxelGrid::integrate(const DepthImage& depth, const ColorIm
     if (n_visible > 0) {
       const hf_intrinsics K = camera.kernel_intrinsics();
       const float mu = float(params_.truncation_m());
-      m.block_frames.setArg(0, m.visible);
-      m.block_frames.setArg(1, n_visible);
-      m.block_frames.setArg(2, m.table);
-      m.block_frames.setArg(3, m.constants);
-      m.block_frames.setArg(4, W);
-      m.block_frames.setArg(5, H);
-      m.block_frames.setArg(6, m.frames);
-      m.block_frames.setArg(7, m.counters);
+      set_args(m.block_frames, m.visible, n_visible, m.table, m.constants, W, H, m.frames, m.counters);
       q.enqueueNDRangeKernel(m.block_frames, cl::NullRange, cl::NDRange(size_t(n_visible)));
       if (params.point_to_plane) {
         const auto t_inc = std::chrono::steady_clock::now();
-        m.incidence.setArg(0, m.depth);
-        m.incidence.setArg(1, K);
-        m.incidence.setArg(2, mu);
-        m.incidence.setArg(3, m.incidence_map);
+        set_args(m.incidence, m.depth, K, mu, m.incidence_map);
         q.enqueueNDRangeKernel(m.incidence, cl::NullRange, cl::NDRange(size_t(W), size_t(H)));
         q.finish();
         stats.incidence_ms = ms_since(t_inc);
@@ -333,23 +306,9 @@ IntegrateStats DeviceVoxelGrid::integrate(const DepthImage& depth, const ColorIm
         steps[a] = {{float(R(0, a) * params_.voxel_m), float(R(1, a) * params_.voxel_m),
                      float(R(2, a) * params_.voxel_m), 0.0f}};
       }
-      int arg = 0;
-      m.update.setArg(arg++, m.visible);
-      m.update.setArg(arg++, n_visible);
-      m.update.setArg(arg++, m.table);
-      m.update.setArg(arg++, m.frames);
-      for (const cl_float4& s : steps) m.update.setArg(arg++, s);
-      m.update.setArg(arg++, m.depth);
-      m.update.setArg(arg++, m.incidence_map);
-      m.update.setArg(arg++, cl_int(params.point_to_plane ? 1 : 0));
-      m.update.setArg(arg++, m.rgb);
-      m.update.setArg(arg++, cl_int(has_rgb ? 1 : 0));
-      m.update.setArg(arg++, K);
-      m.update.setArg(arg++, mu);
-      m.update.setArg(arg++, params_.max_weight);
-      m.update.setArg(arg++, params.observation_weight);
-      m.update.setArg(arg++, m.pool);
-      m.update.setArg(arg++, m.counters);
+      set_args(m.update, m.visible, n_visible, m.table, m.frames, steps[0], steps[1], steps[2], m.depth,
+               m.incidence_map, cl_int(params.point_to_plane ? 1 : 0), m.rgb, cl_int(has_rgb ? 1 : 0), K, mu,
+               params_.max_weight, params.observation_weight, m.pool, m.counters);
       q.enqueueNDRangeKernel(m.update, cl::NullRange,
                              cl::NDRange(round_up(size_t(n_visible) * HF_VOXELS_PER_BLOCK, kUpdateGroup)),
                              cl::NDRange(kUpdateGroup));
@@ -446,12 +405,7 @@ size_t DeviceVoxelGrid::read_last_frame_into(VoxelBlockGrid& grid) const {
       m.staging = cl::Buffer(m.ctx->context(), CL_MEM_READ_WRITE, m.staging_blocks * sizeof(VoxelBlock));
       m.staging_entries = cl::Buffer(m.ctx->context(), CL_MEM_READ_WRITE, m.staging_blocks * sizeof(Entry));
     }
-    m.gather.setArg(0, m.visible);
-    m.gather.setArg(1, cl_uint(n));
-    m.gather.setArg(2, m.table);
-    m.gather.setArg(3, m.pool);
-    m.gather.setArg(4, m.staging);
-    m.gather.setArg(5, m.staging_entries);
+    set_args(m.gather, m.visible, cl_uint(n), m.table, m.pool, m.staging, m.staging_entries);
     q.enqueueNDRangeKernel(m.gather, cl::NullRange, cl::NDRange(n * HF_VOXELS_PER_BLOCK));
     std::vector<Entry> wanted(n);
     std::vector<Voxel> voxels(n * HF_VOXELS_PER_BLOCK);
