@@ -125,6 +125,19 @@ std::string format_polygons_json(const Model& model, const std::vector<std::stri
   return json{{"polygons", polygons}}.dump(2) + "\n";
 }
 
+ColorImage draw_outlines(const ColorImage& photo, const std::vector<std::pair<Polygon2d, Rgb8>>& outlines,
+                         int thickness_px) {
+  cv::Mat m = to_bgr(photo);
+  for (const auto& [q, c] : outlines)
+    if (!q.empty()) polyline(m, q, {double(c.b), double(c.g), double(c.r)}, thickness_px);
+  return from_bgr(m);
+}
+
+Rgb8 guidance_rgb(Guidance g) {
+  const cv::Scalar c = guidance_bgr(g);
+  return {std::uint8_t(c[2]), std::uint8_t(c[1]), std::uint8_t(c[0])};
+}
+
 std::string format_sketch_json(const Sketch& sketch) {
   json polygons = json::array();
   for (const SketchPolygon& p : sketch.polygons) {

@@ -51,6 +51,12 @@ struct ModelJobResult {
   std::vector<std::string> written;            // paths, in the order written
 };
 
+// The overlays' drawing: outlines (closed polylines, anti-aliased) in their colours over a copy of the photo, and
+// the colour of each guidance state (green, yellow, red).
+ColorImage draw_outlines(const ColorImage& photo, const std::vector<std::pair<Polygon2d, Rgb8>>& outlines,
+                         int thickness_px);
+Rgb8 guidance_rgb(Guidance g);
+
 // SKETCH.json's text for a sketch (photogrammetry/sketch.h): parse_sketch reads it back unchanged.
 std::string format_sketch_json(const Sketch& sketch);
 

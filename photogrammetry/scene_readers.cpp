@@ -188,6 +188,8 @@ RunReport parse_run_report(const std::string& text, const std::string& file) {
   } catch (const nlohmann::json::parse_error& e) {
     throw ParseError(file, 0, "expected a run's report.json (JSON), got a syntax error at byte " +
                                   std::to_string(e.byte));
+  } catch (const nlohmann::json::exception&) {  // e.g. a number beyond double's range (out_of_range 406)
+    throw ParseError(file, 0, "expected a run's report.json (JSON), got a number out of range");
   }
   RunReport r;
   if (!j.is_object() || !j.contains("input") || !j["input"].is_string())

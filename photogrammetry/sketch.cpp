@@ -44,6 +44,8 @@ Sketch parse_sketch(const std::string& text, const std::string& file) {
     j = json::parse(text);
   } catch (const json::parse_error& e) {
     throw ParseError(file, 0, "expected JSON, got a syntax error at byte " + std::to_string(e.byte));
+  } catch (const json::exception&) {  // e.g. a number beyond double's range (out_of_range 406)
+    throw ParseError(file, 0, "expected JSON, got a number out of range");
   }
   if (!j.is_object() || !j.contains("polygons") || !j["polygons"].is_array())
     throw ParseError(file, 0, "expected {\"polygons\": [...]}");

@@ -5,8 +5,11 @@
 
 #include <filesystem>
 
+#include "core/error.h"
+#include "photogrammetry/model_outputs.h"
 #include "photogrammetry/polygon_modelling.h"
 #include "photogrammetry/scene_readers.h"
+#include "photogrammetry/sketch_session.h"
 #include "tests/photogrammetry/box_building.h"
 
 namespace hf::photogrammetry {
@@ -197,4 +200,71 @@ TEST(RansacPlanes, SceauxMainFacadesAreVerticalAndFaceTheCameras) {
 }
 
 }  // namespace
+// Interactive sketching (photogrammetry/sketch_session.h) driven by the events the viewer's mouse and keys send: the
+// guidance colour follows each click as the rules above give it, and the sketch is what SKETCH.json would hold.
+TEST(SketchSession, ScriptedClicksGiveTheLiveGuidanceOfTheRules) {
+  const BoxBuilding b;
+  const Network n = box_network();
+  ModelOptions o;
+  o.ransac.distance_threshold = 3 * kNoise;
+  SketchSession session(n, {}, o);
+  const auto sketch_corners = [&](int shot, const std::vector<Eigen::Vector3d>& corners) {
+    session.apply("shot " + n.shots[size_t(shot)].name);
+    for (const Eigen::Vector2d& uv : b.project(n.shots[size_t(shot)], corners))
+      session.apply("click " + std::to_string(uv.x()) + " " + std::to_string(uv.y()));
+    return session.close_view();
+  };
+  EXPECT_EQ(session.current_guidance(), Guidance::red);  // nothing sketched
+  ASSERT_TRUE(sketch_corners(1, b.front_corners()));
+  EXPECT_EQ(session.current_guidance(), Guidance::green);  // one facade segment fits
+  EXPECT_EQ(session.current()->decision.method, Placement::cloud_plane);
+
+  session.apply("new");
+  ASSERT_TRUE(sketch_corners(1, BoxBuilding::window_corners(0)));
+  EXPECT_EQ(session.current_guidance(), Guidance::red);  // a window alone fits no segment
+  session.apply("same_plane");
+  EXPECT_EQ(session.current_guidance(), Guidance::green);  // on the facade's plane
+  EXPECT_EQ(session.current()->decision.method, Placement::polygon_plane);
+
+  session.apply("new");
+  ASSERT_TRUE(sketch_corners(0, BoxBuilding::window_corners(1)));
+  EXPECT_EQ(session.current_guidance(), Guidance::red);
+  ASSERT_TRUE(sketch_corners(2, BoxBuilding::window_corners(1)));
+  EXPECT_EQ(session.current_guidance(), Guidance::yellow);  // two shots
+  // Refused events change nothing: a second outline in a shot already used, one vertex short, a click outside.
+  session.apply("shot " + n.shots[2].name);
+  session.apply("click 10 10");
+  EXPECT_NE(session.message().find("already"), std::string::npos);
+  session.apply("shot " + n.shots[1].name);
+  session.apply("click -5 10");
+  EXPECT_NE(session.message().find("outside"), std::string::npos);
+  const Polygon2d w1 = b.project(n.shots[1], BoxBuilding::window_corners(1));
+  for (size_t k = 0; k < 3; ++k) session.click(w1[k]);
+  EXPECT_FALSE(session.close_view());
+  EXPECT_NE(session.message().find("needs 4 vertices"), std::string::npos);
+  session.click({1, 1});
+  session.apply("undo");
+  session.click(w1[3]);
+  ASSERT_TRUE(session.close_view());
+  EXPECT_EQ(session.current_guidance(), Guidance::green);  // three shots
+  EXPECT_EQ(session.current()->decision.method, Placement::dlt);
+  for (size_t k = 0; k < 4; ++k)
+    EXPECT_LT((session.current()->vertices[k] - BoxBuilding::window_corners(1)[k]).norm(), 1e-4);  // clicks at 1e-6 px
+
+  // The session's sketch models as `hashfusion model` would model its SKETCH.json.
+  const Sketch& s = session.sketch();
+  ASSERT_EQ(s.polygons.size(), 3u);
+  EXPECT_EQ(s.polygons[1].same_plane_as, "p0");
+  EXPECT_EQ(s.polygons[2].views.size(), 3u);
+  const Model again = model_polygons(n, parse_sketch(format_sketch_json(s), "session.json"), o);
+  for (size_t i = 0; i < 3; ++i) EXPECT_EQ(again.polygons[i].decision.state, session.model().polygons[i].decision.state);
+  // The overlay shows the shot with the polygons in their guidance colour.
+  const ColorImage overlay = session.overlay();
+  size_t green = 0;
+  for (const Rgb8& p : overlay.pixels()) green += p.g > p.r + 60 && p.g > p.b + 60;  // anti-aliased green lines
+  EXPECT_GT(green, 100u);
+  EXPECT_THROW(session.apply("jump 3"), Error);
+  EXPECT_THROW(session.apply("click 1"), Error);
+}
+
 }  // namespace hf::photogrammetry
