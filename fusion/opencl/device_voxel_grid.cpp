@@ -63,12 +63,12 @@ struct DeviceVoxelGrid::Impl {
   std::shared_ptr<opencl::Context> ctx;
   DeviceGridOptions options;
   bool fp64 = false;
-  cl::Kernel bands, find, create, block_frames, incidence, update, gather;
+  cl::Kernel band_ends, bands, find, create, block_frames, incidence, update, gather;
   size_t entries = 0;
   int shift = 0;
   cl::Buffer table, stamps, pool, visible, frames, counters, constants;
   // Per frame size: the images and the key lists.
-  cl::Buffer depth, rgb, incidence_map, list, missing;
+  cl::Buffer depth, rgb, incidence_map, list, missing, ends, cells, ok;  // ends / cells / ok: per pixel
   cl::Buffer staging, staging_entries;  // hf_gather_blocks' output, staging_blocks blocks
   size_t staging_blocks = 0;
   size_t pixels = 0, list_capacity = 0;
@@ -88,6 +88,9 @@ struct DeviceVoxelGrid::Impl {
     depth = cl::Buffer(c, CL_MEM_READ_ONLY, n_pixels * sizeof(float));
     rgb = cl::Buffer(c, CL_MEM_READ_ONLY, n_pixels * 3);
     incidence_map = cl::Buffer(c, CL_MEM_READ_WRITE, n_pixels * sizeof(float));
+    ends = cl::Buffer(c, CL_MEM_READ_WRITE, n_pixels * 6 * (fp64 ? sizeof(double) : sizeof(float)));
+    cells = cl::Buffer(c, CL_MEM_READ_WRITE, n_pixels * 6 * sizeof(cl_int));
+    ok = cl::Buffer(c, CL_MEM_READ_WRITE, n_pixels);
     // A ray's band spans 2 mu = truncation_vox / 4 blocks, so it crosses at most ceil(that) + 1 cells per axis and
     // its walk takes at most their sum + 1 steps: the list holds every pixel's worst case.
     const size_t per_pixel = 3 * (size_t(std::ceil(truncation_vox / 4.0)) + 1) + 1;
@@ -148,6 +151,7 @@ DeviceVoxelGrid::DeviceVoxelGrid(const VolumeParams& params, std::shared_ptr<ope
     if (m.fp64) build += " -DHF_FP64=1";
     cl::Program program =
         m.ctx->program(m.fp64 ? "fusion-fp64" : "fusion-fp32", opencl::fusion_program_source(), build);
+    m.band_ends = cl::Kernel(program, "hf_fusion_band_ends");
     m.bands = cl::Kernel(program, "hf_fusion_bands");
     m.find = cl::Kernel(program, "hf_fusion_find");
     m.create = cl::Kernel(program, "hf_fusion_create");
@@ -249,7 +253,9 @@ IntegrateStats DeviceVoxelGrid::integrate(const DepthImage& depth, const ColorIm
 
     // Phase 1: bands, look-up, creation.
     const int W = depth.width(), H = depth.height();
-    set_args(m.bands, m.depth, W, H, m.constants, m.list, cl_uint(m.list_capacity), m.counters);
+    set_args(m.band_ends, m.depth, W, H, m.constants, m.ends, m.cells, m.ok);
+    q.enqueueNDRangeKernel(m.band_ends, cl::NullRange, cl::NDRange(size_t(W), size_t(H)));
+    set_args(m.bands, m.ends, m.cells, m.ok, W, H, m.list, cl_uint(m.list_capacity), m.counters);
     q.enqueueNDRangeKernel(m.bands, cl::NullRange, cl::NDRange(size_t(W), size_t(H)));
     c = m.read_counters();
     if (c[kError] & kErrorList) throw Error(m.where() + ": the frame's block list overflowed (internal error)");

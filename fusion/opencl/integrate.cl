@@ -2,10 +2,11 @@
 // fusion/opencl/device_voxel_grid.h. Embedded into the binary by registration/opencl/embed_opencl.cmake (the shared
 // headers inlined) and built once per context by device_voxel_grid.cpp.
 //
-// One frame is six kernels, in order:
-//   hf_fusion_bands         per pixel: the truncation band [d - mu, d + mu] of its ray in block units and the
-//                           blocks it crosses (Amanatides-Woo), appended to a key list; the same arithmetic, order
-//                           and neighbour skip as the CPU's phase 1 (band_row, traverse in fusion/integrate*.cpp)
+// One frame is seven kernels, in order:
+//   hf_fusion_band_ends     per pixel: the truncation band [d - mu, d + mu] of its ray in block units and its end
+//                           cells, the same arithmetic and order as the CPU's phase 1 (band_row, integrate_cpu.cpp)
+//   hf_fusion_bands         per pixel: the blocks its band crosses (Amanatides-Woo, traverse in integrate.cpp),
+//                           appended to a key list, with the CPU's neighbour skip
 //   hf_fusion_find          per listed key: the block's hash entry (lock-free look-up, no writer runs); found
 //                           blocks join the frame's visible list once (a per-entry frame stamp), missing keys go to
 //                           a second list
@@ -129,12 +130,6 @@ inline int hf_band_cells(__global const float* depth, int u, int v, int width, _
   return ok;
 }
 
-inline int hf_same_cells(const int* p, const int* q) {
-  int same = 1;
-  for (int i = 0; i < 6; ++i) same = same && p[i] == q[i];
-  return same;
-}
-
 inline void hf_emit_block(int x, int y, int z, __global ulong* list, uint list_capacity,
                           volatile __global uint* counters) {
   const uint i = atomic_inc(&counters[HF_C_EMITTED]);
@@ -144,27 +139,53 @@ inline void hf_emit_block(int x, int y, int z, __global ulong* list, uint list_c
     atomic_or(&counters[HF_C_ERROR], HF_E_LIST);
 }
 
-__kernel void hf_fusion_bands(__global const float* depth, int width, int height, __global const hf_real* f,
-                              __global ulong* list, uint list_capacity, volatile __global uint* counters) {
+// Per pixel, its band ends (6 reals) and end cells (6 ints, x y z of the start then of the end) and whether it counts:
+// written once, read by hf_fusion_bands for the pixel and as its right and lower neighbours' skip test.
+__kernel void hf_fusion_band_ends(__global const float* depth, int width, int height, __global const hf_real* f,
+                                  __global hf_real* ends, __global int* cells, __global uchar* ok) {
   const int u = (int)get_global_id(0), v = (int)get_global_id(1);
   if (u >= width || v >= height) return;
-  int cells[6];
+  const int p = v * width + u;
+  int c[6];
   hf_real a[3], b[3];
-  if (!hf_band_cells(depth, u, v, width, f, cells, a, b)) return;
+  ok[p] = (uchar)hf_band_cells(depth, u, v, width, f, c, a, b);
+  for (int i = 0; i < 3; ++i) {
+    ends[6 * p + i] = a[i];
+    ends[6 * p + 3 + i] = b[i];
+  }
+  for (int i = 0; i < 6; ++i) cells[6 * p + i] = c[i];
+}
+
+inline int hf_same_cells_at(__global const int* cells, int p, int q) {
+  int same = 1;
+  for (int i = 0; i < 6; ++i) same = same && cells[6 * p + i] == cells[6 * q + i];
+  return same;
+}
+
+__kernel void hf_fusion_bands(__global const hf_real* ends, __global const int* cells, __global const uchar* ok,
+                              int width, int height, __global ulong* list, uint list_capacity,
+                              volatile __global uint* counters) {
+  const int u = (int)get_global_id(0), v = (int)get_global_id(1);
+  if (u >= width || v >= height) return;
+  const int p = v * width + u;
+  if (!ok[p]) return;
   atomic_inc(&counters[HF_C_PIXELS]);
   // integrate.cpp's skip: a ray whose band starts and ends in the same blocks as its left neighbour's, or its upper
   // neighbour's within the same group of 8 rows, is not walked.
-  int other[6];
-  hf_real oa[3], ob[3];
-  if (u > 0 && hf_band_cells(depth, u - 1, v, width, f, other, oa, ob) && hf_same_cells(other, cells)) return;
-  if (v % 8 != 0 && hf_band_cells(depth, u, v - 1, width, f, other, oa, ob) && hf_same_cells(other, cells)) return;
+  if (u > 0 && ok[p - 1] && hf_same_cells_at(cells, p - 1, p)) return;
+  if (v % 8 != 0 && ok[p - width] && hf_same_cells_at(cells, p - width, p)) return;
+  hf_real a[3], b[3];
+  for (int i = 0; i < 3; ++i) {
+    a[i] = ends[6 * p + i];
+    b[i] = ends[6 * p + 3 + i];
+  }
   // traverse() of integrate.cpp.
   int cell[3], end[3], step[3];
   hf_real t_max[3], t_delta[3];
   for (int i = 0; i < 3; ++i) {
     const hf_real dir = b[i] - a[i];
-    cell[i] = cells[i];
-    end[i] = cells[3 + i];
+    cell[i] = cells[6 * p + i];
+    end[i] = cells[6 * p + 3 + i];
     step[i] = dir > (hf_real)0 ? 1 : (dir < (hf_real)0 ? -1 : 0);
     if (step[i] == 0) {
       t_max[i] = t_delta[i] = (hf_real)INFINITY;
