@@ -18,6 +18,7 @@
 
 #include "core/error.h"
 #include "fusion/kernels/raycast_kernels.h"
+#include "fusion/raycast_stages.h"
 
 namespace hf::fusion {
 
@@ -726,43 +727,32 @@ void forward_project_depth(const VertexMap& vertices, const SE3& T_cur_prev, con
     }
 }
 
-void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
-             const RaycastOptions& options, RaycastResult* out) {
-  options.validate(camera);
-  if (camera.width <= 0 || camera.height <= 0 || !(camera.fx > 0.0 && camera.fy > 0.0))
-    throw Error("raycast: expected a camera with positive size and focal lengths, got " + camera.describe());
-  if (!T_world_camera.is_finite()) throw Error("raycast: expected a finite T_world_camera");
-  const int W = camera.width, H = camera.height;
-  ensure_size(&out->depth, W, H);
-  ensure_size(&out->vertices, W, H);
-  ensure_size(&out->normals, W, H);
-  ensure_size(&out->color, W, H);
-  if (options.shade)
-    ensure_size(&out->shaded, W, H);
-  else
-    out->shaded = ColorImage();
+namespace {
 
-  // The blocks the rays can read, for the range image (which does not depend on their order): the map outgrows
-  // the view on every real sequence. The rays look blocks up in the grid itself (VoxelBlockGrid::find is
-  // lock-free).
+// Stage 1, InfiniTAM's FindVisibleBlocks + CreateExpectedDepths: the depth range per 8 x 8 pixel tile of the blocks
+// in view (blocks_in_view). A ray can only hit inside an allocated block, so it starts at the nearest block its tile
+// sees and stops after the farthest; tiles no block covers are not marched at all.
+struct RangeImage {
+  static constexpr int kTile = 8;
+  int TW = 0, TH = 0;
+  std::vector<float> near, far;  // per tile, metres along the optical axis; near > far: nothing to march
+  size_t tile_of(int x, int y) const { return size_t(y / kTile) * size_t(TW) + size_t(x / kTile); }
+};
+
+RangeImage range_image(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
+                       const RaycastOptions& options) {
+  constexpr int kTile = RangeImage::kTile;
+  // The blocks the rays can read (the range image does not depend on their order): the map outgrows the view on
+  // every real sequence. The rays look blocks up in the grid itself (VoxelBlockGrid::find is lock-free).
   const auto blocks = blocks_in_view(grid, camera, T_world_camera, options);
-  const double voxel_m = grid.params().voxel_m;
-  const float mu_m = float(grid.params().truncation_m());
-  const Eigen::Matrix3f R = T_world_camera.rotation().cast<float>();
-  const Eigen::Matrix3f R_cw = R.transpose();
-  const Eigen::Vector3f o_vox = (T_world_camera.translation() / voxel_m).cast<float>() - Eigen::Vector3f::Constant(0.5f);
-  const MarchParams march_params{mu_m, float(options.step_fraction), float(options.min_step_vox * voxel_m),
-                                 float(voxel_m), float(options.refine_tol_vox * voxel_m)};
-  const DepthImage* hint_image = options.depth_hint;
-
-  // Depth range per 8 x 8 pixel tile (InfiniTAM's range image): a ray can only hit inside an allocated block, so
-  // it starts at the nearest block its tile sees and stops after the farthest; tiles no block covers are not
-  // marched at all. Each block is clipped against the near plane before it is projected: a block straddling the
+  // Each block is clipped against the near plane before it is projected: a block straddling the
   // near plane projects to a bounded region (its part in front of the plane), so it cannot widen every tile.
-  constexpr int kTile = 8;
-  const int TW = (W + kTile - 1) / kTile, TH = (H + kTile - 1) / kTile;
-  std::vector<float> tile_near(size_t(TW) * TH, std::numeric_limits<float>::infinity());
-  std::vector<float> tile_far(size_t(TW) * TH, 0.0f);
+  const int W = camera.width, H = camera.height;
+  RangeImage r;
+  r.TW = (W + kTile - 1) / kTile, r.TH = (H + kTile - 1) / kTile;
+  r.near.assign(size_t(r.TW) * r.TH, std::numeric_limits<float>::infinity());
+  r.far.assign(size_t(r.TW) * r.TH, 0.0f);
+  const int TW = r.TW, TH = r.TH;
   {
     const SE3 T_camera_world = T_world_camera.inverse();
     const Eigen::Matrix3d Rcw = T_camera_world.rotation();
@@ -817,52 +807,65 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
       const float zn = float(std::max(zmin, near_m)), zf = float(zmax);
       for (int ty = ty0; ty <= ty1; ++ty)
         for (int tx = tx0; tx <= tx1; ++tx) {
-          float& n = tile_near[size_t(ty) * TW + tx];
-          float& f = tile_far[size_t(ty) * TW + tx];
+          float& n = r.near[size_t(ty) * TW + tx];
+          float& f = r.far[size_t(ty) * TW + tx];
           n = std::min(n, zn);
           f = std::max(f, zf);
         }
     }
   }
 
-  // One pixel: march its ray, then fill the outputs; true at a hit.
-  auto cast_pixel = [&](VolumeSampler& sampler, int x, int y) -> bool {
-    const Eigen::Vector3f d_cam(float((x - camera.cx) / camera.fx), float((y - camera.cy) / camera.fy), 1.0f);
-    const float len = d_cam.norm();
-    const Eigen::Vector3f u_world = R * (d_cam / len);
-    const Eigen::Vector3f d_vox = u_world / float(voxel_m);
-    Hit hit;
-    bool found = false;
-    const float hint = hint_image != nullptr ? (*hint_image)(x, y) : 0.0f;
+  return r;
+}
+
+// What every ray of one raycast shares, and the two per-pixel stages.
+class RayCaster {
+ public:
+  RayCaster(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
+            const RaycastOptions& options)
+      : camera_(camera),
+        options_(options),
+        range_(range_image(grid, camera, T_world_camera, options)),
+        voxel_m_(float(grid.params().voxel_m)),
+        mu_m_(float(grid.params().truncation_m())),
+        R_(T_world_camera.rotation().cast<float>()),
+        R_cw_(R_.transpose()),
+        o_vox_((T_world_camera.translation() / grid.params().voxel_m).cast<float>() - Eigen::Vector3f::Constant(0.5f)),
+        march_{mu_m_, float(options.step_fraction), float(options.min_step_vox * grid.params().voxel_m), voxel_m_,
+               float(options.refine_tol_vox * grid.params().voxel_m)} {}
+
+  // Stage 2, GenericRaycast: marches pixel (x, y)'s ray (first around its hint, then over its tile's range);
+  // true at a hit. *d_cam: the ray through the pixel at z = 1, *len its length.
+  bool cast(VolumeSampler& sampler, int x, int y, Eigen::Vector3f* d_cam, float* len, Hit* hit) const {
+    *d_cam = Eigen::Vector3f(float((x - camera_.cx) / camera_.fx), float((y - camera_.cy) / camera_.fy), 1.0f);
+    *len = d_cam->norm();
+    const Eigen::Vector3f d_vox = (R_ * (*d_cam / *len)) / voxel_m_;
+    const float hint = options_.depth_hint != nullptr ? (*options_.depth_hint)(x, y) : 0.0f;
     if (hint > 0.0f && std::isfinite(hint)) {
       // The bracket around the depth this frame measured: a + to - crossing there is the surface.
-      const float w = hf_raycast_hint_halfwidth(hint, mu_m, float(voxel_m));
-      const float z0 = std::max(float(options.min_depth_m), hint - w);
-      const float z1 = std::min(float(options.max_depth_m), hint + w);
-      found = z0 <= hint && hint <= z1 &&
-              march_from_hint(sampler, march_params, o_vox, d_vox, hint * len, z0 * len, z1 * len, &hit);
+      const float w = hf_raycast_hint_halfwidth(hint, mu_m_, voxel_m_);
+      const float z0 = std::max(float(options_.min_depth_m), hint - w);
+      const float z1 = std::min(float(options_.max_depth_m), hint + w);
+      if (z0 <= hint && hint <= z1 &&
+          march_from_hint(sampler, march_, o_vox_, d_vox, hint * *len, z0 * *len, z1 * *len, hit))
+        return true;
     }
-    if (!found) {
-      const size_t tile = size_t(y / kTile) * TW + size_t(x / kTile);
-      // One voxel of slack on both sides covers float rounding of the corner projections.
-      const float z0 = std::max(float(options.min_depth_m), tile_near[tile] - float(voxel_m));
-      const float z1 = std::min(float(options.max_depth_m), tile_far[tile] + float(voxel_m));
-      found = z0 < z1 && march(sampler, march_params, o_vox, d_vox, z0 * len, z1 * len, &hit);
-    }
-    if (!found) {
-      out->depth(x, y) = 0.0f;
-      out->vertices(x, y) = hf_invalid4();
-      out->normals(x, y) = hf_invalid4();
-      out->color(x, y) = Rgb8{};
-      if (options.shade) out->shaded(x, y) = Rgb8{};
-      return false;
-    }
+    const size_t tile = range_.tile_of(x, y);
+    // One voxel of slack on both sides covers float rounding of the corner projections.
+    const float z0 = std::max(float(options_.min_depth_m), range_.near[tile] - voxel_m_);
+    const float z1 = std::min(float(options_.max_depth_m), range_.far[tile] + voxel_m_);
+    return z0 < z1 && march(sampler, march_, o_vox_, d_vox, z0 * *len, z1 * *len, hit);
+  }
+
+  // Stage 3, the pixel write: depth, vertex, colour, normal and shading of a hit.
+  void write_hit(VolumeSampler& sampler, int x, int y, const Eigen::Vector3f& d_cam, float len, const Hit& hit,
+                 RaycastResult* out) const {
     const float z = hit.t / len;
     out->depth(x, y) = z;
     out->vertices(x, y) = hf_make_float4(d_cam.x() * z, d_cam.y() * z, z, 1.0f);
     float s = 0.0f;
     Eigen::Vector3f rgb(0.0f, 0.0f, 0.0f);
-    if (options.color && sampler.sdf_color(hit.p_vox, &s, &rgb)) {
+    if (options_.color && sampler.sdf_color(hit.p_vox, &s, &rgb)) {
       auto to8 = [](float c) { return std::uint8_t(std::clamp(c + 0.5f, 0.0f, 255.0f)); };
       out->color(x, y) = Rgb8{to8(rgb.x()), to8(rgb.y()), to8(rgb.z())};
     } else {
@@ -870,19 +873,64 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
     }
     Eigen::Vector3f n_world;
     if (sampler.normal(hit.p_vox, &n_world)) {
-      const Eigen::Vector3f n = R_cw * n_world;
+      const Eigen::Vector3f n = R_cw_ * n_world;
       out->normals(x, y) = hf_make_float4(n.x(), n.y(), n.z(), 1.0f);
-      if (options.shade) {
+      if (options_.shade) {
         const hf_float4 to_cam = hf_make_float4(-d_cam.x() / len, -d_cam.y() / len, -1.0f / len, 0.0f);
         const auto g = std::uint8_t(255.0f * hf_headlight_shade(out->normals(x, y), to_cam) + 0.5f);
         out->shaded(x, y) = Rgb8{g, g, g};
       }
     } else {
       out->normals(x, y) = hf_invalid4();
-      if (options.shade) out->shaded(x, y) = Rgb8{40, 40, 40};
+      if (options_.shade) out->shaded(x, y) = Rgb8{40, 40, 40};
     }
-    return true;
-  };
+  }
+
+  // The pixel write of a miss (or of a pixel not cast).
+  void write_miss(int x, int y, RaycastResult* out) const {
+    out->depth(x, y) = 0.0f;
+    out->vertices(x, y) = hf_invalid4();
+    out->normals(x, y) = hf_invalid4();
+    out->color(x, y) = Rgb8{};
+    if (options_.shade) out->shaded(x, y) = Rgb8{};
+  }
+
+ private:
+  const PinholeCamera& camera_;
+  const RaycastOptions& options_;
+  RangeImage range_;
+  float voxel_m_, mu_m_;
+  Eigen::Matrix3f R_, R_cw_;
+  Eigen::Vector3f o_vox_;
+  MarchParams march_;
+};
+
+}  // namespace
+
+void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
+             const RaycastOptions& options, RaycastResult* out) {
+  raycast_pixels(grid, camera, T_world_camera, options, nullptr, out);
+}
+
+void raycast_pixels(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
+                    const RaycastOptions& options, const Image<std::uint8_t>* rays, RaycastResult* out) {
+  options.validate(camera);
+  if (camera.width <= 0 || camera.height <= 0 || !(camera.fx > 0.0 && camera.fy > 0.0))
+    throw Error("raycast: expected a camera with positive size and focal lengths, got " + camera.describe());
+  if (!T_world_camera.is_finite()) throw Error("raycast: expected a finite T_world_camera");
+  const int W = camera.width, H = camera.height;
+  if (rays != nullptr && (rays->width() != W || rays->height() != H))
+    throw Error("raycast: the ray mask is " + std::to_string(rays->width()) + "x" + std::to_string(rays->height()) +
+                " but the camera is " + camera.describe());
+  ensure_size(&out->depth, W, H);
+  ensure_size(&out->vertices, W, H);
+  ensure_size(&out->normals, W, H);
+  ensure_size(&out->color, W, H);
+  if (options.shade)
+    ensure_size(&out->shaded, W, H);
+  else
+    out->shaded = ColorImage();
+  const RayCaster caster(grid, camera, T_world_camera, options);
 
   // Parallel over 16 x 16 pixel tiles rather than rows: neighbouring rays read the same voxels and find them still
   // in cache (the march is bound by memory latency, not arithmetic). Each pixel is written once: deterministic.
@@ -896,7 +944,17 @@ void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3&
       const int x1 = std::min(x0 + kWork, W), y1 = std::min(y0 + kWork, H);
       int hits = 0;
       for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x) hits += cast_pixel(sampler, x, y) ? 1 : 0;
+        for (int x = x0; x < x1; ++x) {
+          Eigen::Vector3f d_cam;
+          float len = 0.0f;
+          Hit hit;
+          if ((rays == nullptr || (*rays)(x, y) != 0) && caster.cast(sampler, x, y, &d_cam, &len, &hit)) {
+            caster.write_hit(sampler, x, y, d_cam, len, hit, out);
+            ++hits;
+          } else {
+            caster.write_miss(x, y, out);
+          }
+        }
       tile_hits[size_t(wi)] = hits;
     }
   });

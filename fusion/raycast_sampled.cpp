@@ -5,30 +5,13 @@
 #include <vector>
 
 #include "core/error.h"
+#include "fusion/raycast_stages.h"
 
 namespace hf::fusion {
 
 void raycast_sampled(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
                      const RaycastOptions& options, const Image<std::uint8_t>& rays, RaycastResult* out) {
-  if (rays.width() != camera.width || rays.height() != camera.height)
-    throw Error("raycast_sampled: the ray mask is " + std::to_string(rays.width()) + "x" +
-                std::to_string(rays.height()) + " but the camera is " + camera.describe());
-  // Interim: the full raycast, masked (the staged raycast's per-pixel loop replaces it).
-  raycast(grid, camera, T_world_camera, options, out);
-  int hits = 0;
-  for (int y = 0; y < camera.height; ++y)
-    for (int x = 0; x < camera.width; ++x) {
-      if (rays(x, y) != 0) {
-        hits += out->vertices(x, y).w != 0.0f ? 1 : 0;
-        continue;
-      }
-      out->depth(x, y) = 0.0f;
-      out->vertices(x, y) = hf_invalid4();
-      out->normals(x, y) = hf_invalid4();
-      out->color(x, y) = Rgb8{};
-      if (options.shade) out->shaded(x, y) = Rgb8{};
-    }
-  out->hit_count = hits;
+  raycast_pixels(grid, camera, T_world_camera, options, &rays, out);
 }
 
 Image<std::uint8_t> dilate_rays(const Image<std::uint8_t>& rays, int radius_px) {
