@@ -2,27 +2,69 @@
 // shots (OpenMVS dump, Middlebury *_par.txt or a hashfusion run folder) and SKETCH.json in, the 3D polygons, their
 // guidance states, textures and per-shot overlays out (photogrammetry/model_outputs.h).
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <iostream>
+#include <sstream>
 #include <memory>
 #include <string>
 
 #include "apps/commands.h"
+#include "core/atomic_file.h"
+#include "core/bounded_read.h"
 #include "core/error.h"
 #include "io/ply.h"
 #include "photogrammetry/model_outputs.h"
 #include "photogrammetry/scene_readers.h"
 #include "photogrammetry/sketch.h"
+#include "photogrammetry/sketch_session.h"
+#if HF_HAVE_VIEWER
+#include "viewer/sketch_window.h"
+#endif
 
 namespace hf::apps {
 namespace {
 
 struct ModelArgs {
-  std::string shots, polygons, out, cloud, dataset;
+  std::string shots, polygons, out, cloud, dataset, events;
+  bool interactive = false;
   bool all_frames = false, snap = false, transfer = false, no_textures = false, no_overlays = false;
   double acceptance_h = photogrammetry::CloudFitOptions{}.acceptance_h;
   double ransac_threshold = 0.0;
   int texture_px = photogrammetry::TextureOptions{}.max_texture_px;
 };
+
+// Sketching in the session (photogrammetry/sketch_session.h): the --events script's lines, then the window with
+// --interactive; the result is OUT/sketch.json (written before the model job, which checks OUT writable first).
+std::string sketch_interactively(const photogrammetry::Network& network, photogrammetry::Sketch start,
+                                 const ModelArgs& a, const photogrammetry::ModelJobOptions& o,
+                                 photogrammetry::Sketch* out) {
+  photogrammetry::SketchSession session(network, std::move(start), o.model);
+  if (!a.events.empty()) {
+    std::istringstream lines(read_regular_file(a.events, "sketch events"));
+    std::string line;
+    for (int n = 1; std::getline(lines, line); ++n) {
+      if (line.empty() || line[0] == '#') continue;
+      try {
+        session.apply(line);
+      } catch (const Error& e) {
+        throw Error(a.events + ":" + std::to_string(n) + ": " + e.what());
+      }
+    }
+  }
+  if (a.interactive) {
+#if HF_HAVE_VIEWER
+    viewer::run_sketch_window(session);
+#else
+    throw Error("--interactive: the viewer is not built in (install libglfw3-dev and libglm-dev, reconfigure)");
+#endif
+  }
+  prepare_output_folder(a.out);
+  const std::string path = (std::filesystem::path(a.out) / "sketch.json").string();
+  write_file_atomically(path, [&](std::ostream& os) { os << photogrammetry::format_sketch_json(session.sketch()); });
+  std::cout << "sketch: " << path << " (" << session.sketch().polygons.size() << " polygons)\n";
+  *out = session.sketch();
+  return path;
+}
 
 void run_model(const ModelArgs& a) {
   photogrammetry::RunShotsOptions run;
@@ -35,7 +77,6 @@ void run_model(const ModelArgs& a) {
     for (const auto& p : cloud.positions) network.cloud.positions.push_back(p.cast<double>());
     network.cloud.colors = cloud.colors;
   }
-  const photogrammetry::Sketch sketch = photogrammetry::read_sketch(a.polygons);
   photogrammetry::ModelJobOptions o;
   o.model.fit.acceptance_h = a.acceptance_h;
   o.model.ransac.distance_threshold = a.ransac_threshold;
@@ -44,7 +85,13 @@ void run_model(const ModelArgs& a) {
   o.textures = !a.no_textures;
   o.overlays = !a.no_overlays;
   o.texture.max_texture_px = a.texture_px;
-  const photogrammetry::ModelJobResult r = photogrammetry::run_model_job(network, sketch, a.polygons, a.out, o);
+  std::string sketch_name = a.polygons;
+  photogrammetry::Sketch sketch;
+  if (!a.polygons.empty()) sketch = photogrammetry::read_sketch(a.polygons);
+  else if (!a.interactive && a.events.empty())
+    throw Error("model: --polygons SKETCH.json is required (or --interactive / --events to sketch)");
+  if (a.interactive || !a.events.empty()) sketch_name = sketch_interactively(network, std::move(sketch), a, o, &sketch);
+  const photogrammetry::ModelJobResult r = photogrammetry::run_model_job(network, sketch, sketch_name, a.out, o);
   std::cout << network.source << ": " << network.shots.size() << " shots, " << network.cloud.size()
             << " cloud points, " << r.model.segments.size() << " planar segments\n";
   for (const auto& p : r.model.polygons)
@@ -73,8 +120,15 @@ void add_model_command(CLI::App& app) {
                   "the network: an OpenMVS dump folder (cameras_from_scene_mvs.txt), a Middlebury *_par.txt (or its "
                   "folder), or a hashfusion run folder (report.json; keyframes become shots)")
       ->required();
-  cmd->add_option("--polygons", a->polygons, "SKETCH.json: 2D polygons per shot (README: Photogrammetric modelling)")
-      ->required();
+  cmd->add_option("--polygons", a->polygons,
+                  "SKETCH.json: 2D polygons per shot (README: Photogrammetric modelling); required unless sketching "
+                  "with --interactive / --events, which start from it when given");
+  cmd->add_flag("--interactive", a->interactive,
+                "sketch in a window: click vertices on a shot and see the guidance colour (Enter close, Backspace "
+                "undo, n new polygon, p same plane as the previous, Tab next shot, q done); writes OUT/sketch.json");
+  cmd->add_option("--events", a->events,
+                  "sketch by a script of the window's events, one per line (click U V | undo | close | same_plane | "
+                  "new | shot NAME), before the window with --interactive; writes OUT/sketch.json");
   cmd->add_option("--out", a->out, "output folder (created)")->required();
   cmd->add_option("--cloud", a->cloud, "a .ply point cloud (or mesh) replacing the network's cloud");
   cmd->add_option("--dataset", a->dataset, "a run's TUM folder when report.json's \"input\" has moved");

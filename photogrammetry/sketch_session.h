@@ -41,6 +41,7 @@ class SketchSession {
   void show_shot(int shot);
   void apply(const std::string& event);
 
+  const Network& network() const { return network_; }
   const Sketch& sketch() const { return sketch_; }
   const Model& model() const { return model_; }
   int shown_shot() const { return shot_; }

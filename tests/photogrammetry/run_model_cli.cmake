@@ -104,7 +104,32 @@ if(NOT rc EQUAL 0 OR NOT method STREQUAL "dlt")
   message(FATAL_ERROR "model on transferred.json: expected half placed by dlt, got ${rc} ${method}: ${err}")
 endif()
 
-file(GLOB_RECURSE leftovers ${WORK}/out/.* ${WORK}/transfer/.*)
+# Interactive sketching by its events (sketch_events.txt: tri's three views, a refused click outside the image and
+# an undone one): the same polygon, green by DLT, and OUT/sketch.json holds the sketch.
+execute_process(COMMAND ${HASHFUSION} model --shots ${DATA} --events ${CMAKE_CURRENT_LIST_DIR}/sketch_events.txt
+                        --out ${WORK}/events --no-textures
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${WORK}/events/sketch.json)
+  message(FATAL_ERROR "model --events failed (${rc}): ${err}")
+endif()
+file(READ ${WORK}/events/polygons.json json3)
+string(JSON state GET "${json3}" polygons 0 guidance)
+string(JSON z GET "${json3}" polygons 0 vertices 0 2)
+file(READ ${WORK}/events/sketch.json events_sketch)
+string(JSON views LENGTH "${events_sketch}" polygons 0 views)
+string(JSON vertices LENGTH "${events_sketch}" polygons 0 views 2 points)
+if(NOT state STREQUAL "green" OR NOT z MATCHES "^-0\\.0(5999|6000)" OR NOT views EQUAL 3 OR NOT vertices EQUAL 3)
+  message(FATAL_ERROR "model --events: expected tri green at z -0.06 from 3 views of 3 vertices, got ${state} ${z} "
+                      "${views} ${vertices}")
+endif()
+file(WRITE ${WORK}/bad_events.txt "shot templeR0013.png\njump 3\n")
+execute_process(COMMAND ${HASHFUSION} model --shots ${DATA} --events ${WORK}/bad_events.txt --out ${WORK}/bad_events
+                RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_QUIET)
+if(NOT rc EQUAL 1 OR NOT err MATCHES "bad_events.txt:2: sketch event 'jump 3': expected")
+  message(FATAL_ERROR "bad event: expected exit 1 naming the file and line, got ${rc}: ${err}")
+endif()
+
+file(GLOB_RECURSE leftovers ${WORK}/out/.* ${WORK}/transfer/.* ${WORK}/events/.*)
 if(leftovers)
   message(FATAL_ERROR "temporary files left: ${leftovers}")
 endif()

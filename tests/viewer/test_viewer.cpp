@@ -15,6 +15,7 @@
 #include "viewer/gl_context.h"
 #include "viewer/mesh_renderer.h"
 #include "viewer/run_viewer.h"
+#include "viewer/sketch_window.h"
 #include "viewer/view_controller.h"
 
 using namespace std::chrono_literals;
@@ -67,6 +68,24 @@ TEST(ViewController, QuitReleaseSaveAndViewKeys) {
   const Eigen::Vector3d in_view = c.T_world_view().inverse() * Eigen::Vector3d(0, 0, 1.5);
   EXPECT_NEAR(in_view.x() / in_view.z(), 0.0, 1e-9);
   EXPECT_NEAR(in_view.y() / in_view.z(), 0.0, 1e-9);
+}
+
+// The sketch window's input, without a window: keys send the session's events, a click maps to the image pixel
+// under it (pixel centres at integers, drawn at `scale` from the top-left corner).
+TEST(SketchWindow, KeysAndClicksMapToSessionEvents) {
+  hf::photogrammetry::Network n;
+  for (const char* name : {"a.png", "b.png", "c.png"}) n.shots.push_back({name, "", false, 64, 48});
+  using hf::viewer::sketch_key_event;
+  EXPECT_EQ(sketch_key_event(257 /* GLFW_KEY_ENTER */, 0, n, 0), "close");
+  EXPECT_EQ(sketch_key_event(259 /* GLFW_KEY_BACKSPACE */, 0, n, 0), "undo");
+  EXPECT_EQ(sketch_key_event(78 /* GLFW_KEY_N */, 0, n, 0), "new");
+  EXPECT_EQ(sketch_key_event(80 /* GLFW_KEY_P */, 0, n, 0), "same_plane");
+  EXPECT_EQ(sketch_key_event(258 /* GLFW_KEY_TAB */, 0, n, 2), "shot a.png");        // wraps round
+  EXPECT_EQ(sketch_key_event(258, 1 /* GLFW_MOD_SHIFT */, n, 0), "shot c.png");     // backwards
+  EXPECT_FALSE(sketch_key_event(65 /* GLFW_KEY_A */, 0, n, 0));
+  // At scale 2 window pixel (0.5 .. 2.5) covers image pixel 0's footprint [-0.5, 0.5] x 2; its centre is at 1.
+  EXPECT_EQ(hf::viewer::window_to_image(1.0, 1.0, 2.0), Eigen::Vector2d(0.0, 0.0));
+  EXPECT_EQ(hf::viewer::window_to_image(21.0, 9.0, 2.0), Eigen::Vector2d(10.0, 4.0));
 }
 
 TEST(Viewer, ScreenshotNames) {
