@@ -16,10 +16,15 @@
 #include <string>
 #include <vector>
 
+#include "core/se3.h"
 #include "registration/frame_pyramid.h"
 #include "registration/reduction.h"
 
 namespace hf {
+
+namespace fusion {
+class VoxelBlockGrid;  // fusion/voxel_block_grid.h
+}
 
 enum class RobustKernel;  // registration/registration.h
 
@@ -59,6 +64,17 @@ class DenseMethod {
     (void)unit_scale;
     return terms.empty() ? NormalEquations{} : terms.front();
   }
+
+  // A method whose rows read a map rather than the reference pyramid (sdf): Registration::aligns_to_volume and
+  // set_volume, passed through by the driver. While reads_reference() is false the driver asks nothing of the
+  // reference pyramid (begin_level gets the current level in its place) and does not verify a large motion by the
+  // reverse problem (a frame cannot be aligned onto a map the other way round).
+  virtual bool aligns_to_volume() const { return false; }
+  virtual void set_volume(const fusion::VoxelBlockGrid* grid, const SE3& T_world_ref) {
+    (void)grid;
+    (void)T_world_ref;
+  }
+  virtual bool reads_reference() const { return true; }
 };
 
 // Valid vertices on the pixel grid x, y = 0, step, 2 step, ...

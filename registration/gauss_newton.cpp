@@ -225,7 +225,7 @@ RegistrationResult GaussNewtonRegistration::align(const FramePyramid& current, c
   }
   try {
     RegistrationResult result = align_impl(current, reference, T_ref_cur_initial);
-    if (result.usable()) {
+    if (result.usable() && method_->reads_reference()) {
       verify_large_motion(
           o, T_ref_cur_initial, [&](const SE3& T_reverse) { return align_impl(reference, current, T_reverse); },
           result);
@@ -243,11 +243,12 @@ RegistrationResult GaussNewtonRegistration::align(const FramePyramid& current, c
 
 ResidualProblem GaussNewtonRegistration::level_problem(const FramePyramid& current, const FramePyramid& reference,
                                                       int level, const SE3& T_ref_cur) {
-  if (level < 0 || level >= current.num_levels() || level >= reference.num_levels()) {
+  const bool reads_reference = method_->reads_reference();
+  if (level < 0 || level >= current.num_levels() || (reads_reference && level >= reference.num_levels())) {
     throw Error("registration '" + name_ + "': no pyramid level " + std::to_string(level));
   }
   const FramePyramidLevel& c = current.levels[size_t(level)];
-  const FramePyramidLevel& r = reference.levels[size_t(level)];
+  const FramePyramidLevel& r = reads_reference ? reference.levels[size_t(level)] : c;
   ResidualProblem problem;
   problem.kernel = &method_->kernel();
   problem.camera = c.camera.kernel_intrinsics();
@@ -275,7 +276,9 @@ RegistrationResult GaussNewtonRegistration::align_impl(const FramePyramid& curre
   RegistrationResult result;
   result.T_ref_cur = T_initial;
   result.iterations_per_level.assign(o.iterations.size(), 0);
-  const int levels = std::min({int(o.iterations.size()), current.num_levels(), reference.num_levels()});
+  const bool reads_reference = method_->reads_reference();
+  const int levels = std::min({int(o.iterations.size()), current.num_levels(),
+                               reads_reference ? reference.num_levels() : current.num_levels()});
   auto fail = [&](RegistrationStatus status, const std::string& message) {
     result.T_ref_cur = T_initial;
     result.status = status;
@@ -285,7 +288,7 @@ RegistrationResult GaussNewtonRegistration::align_impl(const FramePyramid& curre
   if (levels < 1) return fail(RegistrationStatus::no_data, "empty pyramid");
   for (int l = 0; l < levels; ++l) {
     const FramePyramidLevel& c = current.levels[size_t(l)];
-    const FramePyramidLevel& r = reference.levels[size_t(l)];
+    const FramePyramidLevel& r = reads_reference ? reference.levels[size_t(l)] : c;
     if (!level_consistent(c) || !level_consistent(r) || !same_camera(c.camera, r.camera)) {
       return fail(RegistrationStatus::failed,
                   "level " + std::to_string(l) + ": the current and reference maps differ in camera or size");
@@ -295,7 +298,7 @@ RegistrationResult GaussNewtonRegistration::align_impl(const FramePyramid& curre
     }
   }
   const long valid_cur = count_valid_pixels(current.levels[0].vertices);
-  const long valid_ref = count_valid_pixels(reference.levels[0].vertices);
+  const long valid_ref = reads_reference ? count_valid_pixels(reference.levels[0].vertices) : valid_cur;
   if (valid_cur < o.min_inliers || valid_ref < o.min_inliers) {
     return fail(RegistrationStatus::no_data, "too few valid pixels (current " + std::to_string(valid_cur) +
                                                  ", reference " + std::to_string(valid_ref) + ")");

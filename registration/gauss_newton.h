@@ -71,6 +71,10 @@ class GaussNewtonRegistration : public Registration {
                            const SE3& T_ref_cur_initial) override;
   std::string name() const override { return name_; }
   const RegistrationOptions& options() const override { return options_; }
+  bool aligns_to_volume() const override { return method_->aligns_to_volume(); }
+  void set_volume(const fusion::VoxelBlockGrid* grid, const SE3& T_world_ref) override {
+    method_->set_volume(grid, T_world_ref);
+  }
   ReductionBackend& backend() { return *backend_; }
   const DenseMethod& method() const { return *method_; }
   // The problem the driver reduces in the first iteration of pyramid `level` for the pair at T_ref_cur (for tests

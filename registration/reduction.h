@@ -55,6 +55,9 @@ struct DenseKernel {
   // OpenCL C source of the kernel (its header's text) for a method whose kernel is not in the embedded program
   // (one registered at run time); empty for the built-in methods.
   const char* opencl_source = "";
+  // Its parameters point into host memory (sdf's read the TSDF), so only the cpu backend can reduce it; the
+  // OpenCL backend throws hf::Error naming it.
+  bool host_only = false;
 };
 
 // One level's inputs for one method: its kernel, the maps it reads, its parameters. The maps and params are owned

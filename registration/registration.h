@@ -29,6 +29,10 @@
 
 namespace hf {
 
+namespace fusion {
+class VoxelBlockGrid;  // fusion/voxel_block_grid.h
+}
+
 enum class RegistrationStatus {
   good,        // converged, well conditioned, enough inliers
   poor,        // converged but few inliers or large residuals: usable with care
@@ -231,6 +235,17 @@ class Registration {
                                    const SE3& T_ref_cur_initial) = 0;
   virtual std::string name() const = 0;
   virtual const RegistrationOptions& options() const = 0;
+
+  // A method that can align to the map itself (sdf: the TSDF) says so here; set_volume() then hands it the map
+  // and the pose of the reference camera in it (T_ref_cur stays relative to that camera), and align() neither
+  // reads nor needs the reference pyramid (it may be empty), so a pipeline can skip its tracking raycast. The map
+  // must outlive the align() calls and not change during one; nullptr takes it back. Other methods: false, and
+  // set_volume() does nothing.
+  virtual bool aligns_to_volume() const { return false; }
+  virtual void set_volume(const fusion::VoxelBlockGrid* grid, const SE3& T_world_ref) {
+    (void)grid;
+    (void)T_world_ref;
+  }
 };
 
 // A registry entry: the name users type, the method's default options, its factory (which validates the options

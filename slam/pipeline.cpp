@@ -55,6 +55,32 @@ Consistency depth_consistency(const VertexMap& current, const DepthImage& refere
   return c;
 }
 
+// depth_consistency's question asked of the map itself, for a primary method that aligns to the volume (no
+// tracking raycast to compare with): a sample overlaps where the TSDF around its world point is observed, and
+// agrees where its distance to the surface there is within the same noise bound.
+Consistency volume_consistency(const VertexMap& current, const fusion::VoxelBlockGrid& grid,
+                               const SE3& T_world_cur) {
+  const Eigen::Matrix3f R = T_world_cur.rotation().cast<float>();
+  const Eigen::Vector3f t = T_world_cur.translation().cast<float>();
+  const float inv_voxel = float(1.0 / grid.params().voxel_m), mu = float(grid.params().truncation_m());
+  fusion::VolumeSampler sampler(grid, 0.0f, false);
+  Consistency c;
+  constexpr int kStride = 4;
+  for (int y = kStride / 2; y < current.height(); y += kStride) {
+    for (int x = kStride / 2; x < current.width(); x += kStride) {
+      const hf_float4& v = current(x, y);
+      if (v.w == 0.0f) continue;
+      ++c.sampled;
+      const Eigen::Vector3f p = R * Eigen::Vector3f(v.x, v.y, v.z) + t;
+      float s = 0.0f;
+      if (!sampler.sdf(p * inv_voxel - Eigen::Vector3f::Constant(0.5f), &s)) continue;
+      ++c.overlap;
+      c.consistent += std::abs(s * mu) <= 3.0f * hf_kinect_axial_sigma_m(v.z) + 1.0f / inv_voxel;
+    }
+  }
+  return c;
+}
+
 // The z of a vertex map as a depth image (0 where invalid).
 DepthImage depth_of(const VertexMap& v) {
   DepthImage d(v.width(), v.height(), 0.0f);
@@ -89,6 +115,9 @@ struct Pipeline::Reference {
   SE3 T_world_model;             // that pose
   FramePyramid pyramid;          // model vertices/normals per level + the last frame's intensity/gradients
   bool valid = false;
+  // The primary method aligns to the map itself (Registration::aligns_to_volume): the pose moved on without a
+  // raycast, so model and pyramid are not of T_world_model; cast on demand (ensure_reference_maps).
+  bool stale = false;
 };
 
 // What decide() concluded for one frame; applied by process() only after it is final.
@@ -243,19 +272,19 @@ Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_
   const auto t0 = std::chrono::steady_clock::now();
   SE3 guess = config_.constant_velocity && lost_spell_ == 0 ? velocity_ : SE3();
   if (seed_) {  // a wide-baseline estimate replaces a motion prior it disagrees with (seed_registration)
-    const RegistrationResult seed = seed_->align(current, reference_->pyramid, guess);
+    const RegistrationResult seed = align_to_model(*seed_, current, guess);
     const SE3 d = guess.inverse() * seed.T_ref_cur;
     if (seed.usable() && (d.translation().norm() > config_.seed_min_motion_m ||
                           d.angle_rad() * 180.0 / M_PI > config_.seed_min_motion_deg))
       guess = seed.T_ref_cur;
   }
-  Verdict primary = decide(registration_->align(current, reference_->pyramid, guess), current, timestamp_s,
+  Verdict primary = decide(align_to_model(*registration_, current, guess), current, timestamp_s,
                            config_.registration);
   if (primary.action == Verdict::integrate || !fallback_) {
     r->ms.track = ms_since(t0);
     return primary;
   }
-  Verdict fallback = decide(fallback_->align(current, reference_->pyramid, guess), current, timestamp_s,
+  Verdict fallback = decide(align_to_model(*fallback_, current, guess), current, timestamp_s,
                             config_.fallback_registration);
   r->ms.track = ms_since(t0);
   if (fallback.action == Verdict::integrate) {
@@ -296,8 +325,11 @@ Pipeline::Verdict Pipeline::decide(const RegistrationResult& reg, const FramePyr
     return v;
   }
   v.T_world_cur = reference_->T_world_model * reg.T_ref_cur;
-  const Consistency cons = depth_consistency(current.levels[0].vertices, reference_->model.depth, tracking_camera_,
-                                             reg.T_ref_cur, config_.volume.voxel_m);
+  const Consistency cons =
+      reference_->stale
+          ? volume_consistency(current.levels[0].vertices, grid_, v.T_world_cur)
+          : depth_consistency(current.levels[0].vertices, reference_->model.depth, tracking_camera_, reg.T_ref_cur,
+                              config_.volume.voxel_m);
   if (cons.sampled > 0 && double(cons.overlap) >= config_.min_overlap * double(cons.sampled) &&
       double(cons.consistent) < config_.min_consistent * double(cons.overlap)) {
     v.why = "depth disagrees with the map: " + std::to_string(cons.consistent) + " of " +
@@ -539,8 +571,17 @@ double Pipeline::finish(bool global) {
 }
 
 // The model maps at the new pose become the reference, with this frame's intensity as the photometric reference.
+// A primary method that aligns to the map itself needs no raycast: the reference is then the pose alone, and its
+// maps are cast only if another method asks for them (ensure_reference_maps).
 void Pipeline::raycast_reference(FramePyramid& current, const SE3& T_world_cur, bool integrated, FrameResult* r) {
   const auto t0 = std::chrono::steady_clock::now();
+  if (registration_ && registration_->aligns_to_volume()) {
+    reference_->T_world_model = T_world_cur;
+    reference_->stale = true;
+    reference_->valid = grid_.block_count() > 0;
+    r->ms.raycast = ms_since(t0);
+    return;
+  }
   // The frame just integrated from this pose tells each ray where the surface is (fusion/raycast.h depth_hint):
   // its depth at the tracking resolution, from the pyramid's vertices. Where the frame has no depth, the last
   // model raycast moved to this pose (fusion::forward_project_depth) does: those rays would otherwise march
@@ -581,7 +622,29 @@ void Pipeline::raycast_reference(FramePyramid& current, const SE3& T_world_cur, 
     dst.grad_y = std::move(src.grad_y);
   }
   reference_->valid = reference_->model.hit_count > 0;
+  reference_->stale = false;
   r->ms.raycast = ms_since(t0);
+}
+
+void Pipeline::ensure_reference_maps() {
+  if (!reference_->stale) return;
+  fusion::raycast(grid_, tracking_camera_, reference_->T_world_model, config_.raycast, &reference_->model);
+  reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
+                                            tracking_camera_, config_.pyramid.levels);
+  reference_->stale = false;
+}
+
+// A method that aligns to the map gets it (and the reference pose) for this one call only: the same object also
+// registers keyframe pairs, pyramid to pyramid. Any other method gets the reference maps, cast now if stale.
+RegistrationResult Pipeline::align_to_model(Registration& method, const FramePyramid& current, const SE3& guess) {
+  if (!method.aligns_to_volume()) {
+    ensure_reference_maps();
+    return method.align(current, reference_->pyramid, guess);
+  }
+  method.set_volume(&grid_, reference_->T_world_model);
+  RegistrationResult result = method.align(current, FramePyramid{}, guess);
+  method.set_volume(nullptr, SE3());
+  return result;
 }
 
 // An integrated frame is compressed once, for the re-fusion store and, when it is due, as a keyframe (which is

@@ -178,6 +178,8 @@ class Pipeline {
   std::optional<Verdict> relocalise(const RgbdFrame& frame, const FramePyramid& current, FrameResult* r);
   void integrate(const RgbdFrame& frame, const SE3& T_world_cur, FrameResult* r);
   void raycast_reference(FramePyramid& current, const SE3& T_world_cur, bool integrated, FrameResult* r);
+  void ensure_reference_maps();
+  RegistrationResult align_to_model(Registration& method, const FramePyramid& current, const SE3& guess);
   void keep_frame(const RgbdFrame& frame, FrameResult* r);
   void commit_pending_images();
   void close_loops(const RgbdFrame& frame, FrameResult* r);

@@ -69,6 +69,9 @@ std::size_t OpenClReductionBackend::bytes_per_item() const {
 cl::Kernel& OpenClReductionBackend::method_kernel(const DenseKernel& method) {
   auto it = kernels_.find(method.name);
   if (it != kernels_.end()) return it->second;
+  if (method.host_only)
+    throw Error("OpenCL backend: method '" + std::string(method.name) +
+                "' reads host memory (DenseKernel::host_only) and reduces on the cpu backend only");
   const std::string entry = std::string("hf_reg_reduce_") + method.name;
   cl::Kernel kernel;
   if (method.opencl_source != nullptr && method.opencl_source[0] != '\0') {

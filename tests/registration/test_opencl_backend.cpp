@@ -110,7 +110,8 @@ TEST(OpenClContext, EmbeddedSourceInlinesTheSharedHeaders) {
   const std::string_view src = opencl::registration_program_source();
   // Every registered per-pixel method's kernel is in the program.
   for (const std::string& name : registration_names()) {
-    if (test::method_under_test(name).dense == nullptr) continue;
+    const test::MethodUnderTest m = test::method_under_test(name);
+    if (m.dense == nullptr || m.dense->method().kernel().host_only) continue;  // host_only: cpu backend only
     EXPECT_NE(src.find("HF_REG_OPENCL_KERNEL(" + name + ","), std::string_view::npos) << name;
   }
   EXPECT_NE(src.find("#line 1 \"registration/kernels/reg_common.h\""), std::string_view::npos);
@@ -202,6 +203,7 @@ TEST_P(BackendsAgree, OnTheNormalEquationsAndTheSolvedStep) {
     test::MethodUnderTest method;
     ResidualProblem p = make_problem(pair, level, name, robust, T0, method);
     if (method.dense == nullptr) GTEST_SKIP() << name << " is not a per-pixel method";
+    if (p.kernel->host_only) GTEST_SKIP() << name << " reads host memory: it reduces on the cpu backend only";
     p.inputs_version = std::uint64_t(level + 1);
     const NormalEquations a = cpu.reduce(p);
     const NormalEquations b = cl_backend.reduce(p);

@@ -53,6 +53,21 @@ TEST(Pipeline, CombinedTracksRoomWithinOneCentimetre) {
   for (size_t i = 1; i < run.frames.size(); ++i) EXPECT_EQ(run.frames[i].state, TrackState::tracked) << i;
 }
 
+// `sdf` aligns each frame to the TSDF itself (Registration::aligns_to_volume), so the pipeline skips the tracking
+// raycast and checks depth agreement against the volume: the room still tracks within a centimetre, every frame
+// tracked (60 frames, Kinect-like noise, the bound of combined's test above).
+TEST(Pipeline, SdfTracksRoomWithoutATrackingRaycast) {
+  auto source = datasets::open_synthetic("room", half_res("room", 60));
+  Pipeline pipeline(config_for("sdf"), source->camera());
+  const SequenceRun run = run_sequence(*source, pipeline);
+  ASSERT_EQ(run.frames.size(), 60u);
+  const RunSummary s = summarize(run, pipeline, *source, "synthetic:room");
+  EXPECT_EQ(s.frames_lost, 0);
+  ASSERT_TRUE(s.ate_rmse_m());
+  EXPECT_LT(*s.ate_rmse_m(), 0.01);
+  for (size_t i = 1; i < run.frames.size(); ++i) EXPECT_EQ(run.frames[i].state, TrackState::tracked) << i;
+}
+
 // PipelineConfig::model_hint: where the frame has no depth (the `holes` preset drops blobs of it), the tracking
 // raycast searches from the last model raycast's depth instead of marching the whole ray. Where both find a
 // surface it is the same one, refined to 0.05 voxel, so tracking must be as good either way: no frame lost, and the

@@ -1,0 +1,49 @@
+// "sdf": direct volume tracking (Bylow et al. 2013, "Real-Time Camera Tracking and 3D Reconstruction Using Signed
+// Distance Functions"; Canelhas et al. 2013, "SDF Tracker"; report section 3.5). The current frame's points are
+// aligned to the voxel-hashed TSDF itself instead of to a raycast of it:
+//
+//   r(p) = D(T_world_ref T_ref_cur p)          D: the trilinear TSDF in metres (normalised sdf * mu)
+//   dr/dv = R_world_ref^T grad D               v = T_ref_cur p, grad D: the analytic gradient of the trilinear cell
+//
+// on the shared Gauss-Newton driver (pyramid of the current frame, robust weights, the balanced degeneracy-aware
+// solve, the outcome rules). A point gives a row only where its eight voxels are observed and |sdf| < max_abs_sdf
+// (in the truncated band the field is flat: no gradient, and its value is a bound, not a distance).
+//
+// Where the map comes from: Registration::set_volume (the SLAM pipeline hands over its map and the last pose, and
+// then skips the tracking raycast: Registration::aligns_to_volume). Without one (a pairwise use, the registry's
+// tests), the method fuses the reference level it is given into a volume of its own (voxel_m, identity pose) and
+// aligns to that, so it is a drop-in pairwise method too.
+//
+// Backends: the rows read the map in host memory, which has no device copy yet (issue 20), so the method reduces on
+// the cpu backend whatever backend it is given (DenseKernel::host_only; name() says "sdf").
+#pragma once
+
+#include "registration/registration.h"
+
+namespace hf {
+
+// The measurements behind the defaults: bench/results/sdf_tracking.md (chosen on fr1/rpy frames 0-149, reported
+// on 150-269, 0-269, fr1/desk and 7-Scenes).
+struct SdfOptions : MethodOptionsBase<SdfOptions> {
+  // Rows only where |normalised sdf| is below this: 1 is the truncation band's edge, where the field goes flat.
+  float max_abs_sdf = 0.9f;
+  // Voxels observed fewer times count as unobserved (TSDF weight units; 0: any observation).
+  float min_voxel_weight = 0.0f;
+  // IRLS weights of the distance (metres): Huber with k, or Student-t with a fixed sigma.
+  RobustKernel robust_sdf = RobustKernel::huber;
+  float huber_sdf_m = 0.01f;
+  float t_sigma_sdf_m = 0.01f;
+  float t_dof_sdf = 5.0f;
+  // The volume the method fuses the reference into when no map was set (pairwise use). 6 voxels, not the map's 4:
+  // on the registry's noisy room pair 2.81 mm vs 3.08 mm (tests/registration/test_accuracy.cpp; the wider band
+  // averages a one-frame field over more depth); 5 mm voxels halve the basin and miss the 9.6 mm motion (8 mm).
+  double own_voxel_m = 0.01;
+  double own_truncation_vox = 6.0;
+
+  void visit(OptionVisitor& v) override;
+  void validate() const override;
+};
+
+RegistrationMethod sdf_registration_method();
+
+}  // namespace hf
