@@ -167,6 +167,7 @@ DeviceVoxelGrid::DeviceVoxelGrid(const VolumeParams& params, std::shared_ptr<ope
     m.frames = cl::Buffer(c, CL_MEM_READ_WRITE, params_.capacity_blocks * 4 * sizeof(float));
     m.counters = cl::Buffer(c, CL_MEM_READ_WRITE, kCounters * sizeof(std::uint32_t));
     m.constants = cl::Buffer(c, CL_MEM_READ_ONLY, kFrameConstants * (m.fp64 ? sizeof(double) : sizeof(float)));
+    m.ctx->queue().enqueueFillBuffer(m.pool, std::uint32_t(0), 0, pool_bytes);
   } catch (const Error&) {
     throw;
   } catch (...) {
@@ -187,8 +188,9 @@ void DeviceVoxelGrid::clear() {
     cl::CommandQueue& q = m.ctx->queue();
     q.enqueueFillBuffer(m.table, std::uint32_t(0), 0, m.entries * sizeof(Entry));
     q.enqueueFillBuffer(m.stamps, std::uint32_t(0), 0, m.entries * sizeof(std::uint32_t));
-    // A block is zero (unobserved) when it is created: slots are handed out once, from a cleared pool.
-    q.enqueueFillBuffer(m.pool, std::uint32_t(0), 0, params_.capacity_blocks * sizeof(VoxelBlock));
+    // A block is zero (unobserved) when it is created: slots are handed out from 0 up, so only the slots handed
+    // out since the pool was zeroed (all of it, in the constructor) need zeroing again.
+    if (m.pool_next > 0) q.enqueueFillBuffer(m.pool, std::uint32_t(0), 0, m.pool_next * sizeof(VoxelBlock));
     q.finish();
   } catch (...) {
     opencl::rethrow_as_hf_error(m.where());
