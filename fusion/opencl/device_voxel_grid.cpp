@@ -28,7 +28,7 @@ enum Counter : int {
 };
 constexpr std::uint32_t kErrorPool = 1, kErrorProbe = 2, kErrorList = 4;
 constexpr int kFrameConstants = 34;  // HF_F_COUNT
-constexpr size_t kUpdateGroup = 64;  // work-items per group of hf_fusion_update (divides 512)
+constexpr size_t kUpdateGroup = 64;  // work-items per group of the 1-D kernels (divides 512)
 
 struct Entry {
   std::int32_t x, y, z;
@@ -41,6 +41,12 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 }
 
 size_t round_up(size_t n, size_t m) { return (n + m - 1) / m * m; }
+
+// A 1-D kernel over n items (the kernels ignore items >= n) in groups of kUpdateGroup: a fixed work-group size, so
+// a driver that compiles a kernel per work-group size (PoCL) does it once, not for every frame's item count.
+void enqueue_1d(cl::CommandQueue& q, const cl::Kernel& kernel, size_t n) {
+  q.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(round_up(n, kUpdateGroup)), cl::NDRange(kUpdateGroup));
+}
 
 // kernel.setArg(0, args[0]), setArg(1, args[1]), ...
 template <class... Args>
@@ -267,7 +273,7 @@ IntegrateStats DeviceVoxelGrid::integrate(const DepthImage& depth, const ColorIm
       const cl_uint mask = cl_uint(m.entries - 1);
       set_args(m.find, m.list, emitted, m.table, mask, m.shift, m.options.max_probe, m.stamps,
                cl_uint(m.frame_stamp), m.visible, m.missing, m.counters);
-      q.enqueueNDRangeKernel(m.find, cl::NullRange, cl::NDRange(size_t(emitted)));
+      enqueue_1d(q, m.find, emitted);
       set_args(m.create, m.list, m.missing, m.table, mask, m.shift, m.options.max_probe, m.stamps,
                cl_uint(m.frame_stamp), m.visible, cl_uint(params_.capacity_blocks), m.counters);
       q.enqueueNDRangeKernel(m.create, cl::NullRange, cl::NDRange(1));
@@ -298,7 +304,7 @@ IntegrateStats DeviceVoxelGrid::integrate(const DepthImage& depth, const ColorIm
       const hf_intrinsics K = camera.kernel_intrinsics();
       const float mu = float(params_.truncation_m());
       set_args(m.block_frames, m.visible, n_visible, m.table, m.constants, W, H, m.frames, m.counters);
-      q.enqueueNDRangeKernel(m.block_frames, cl::NullRange, cl::NDRange(size_t(n_visible)));
+      enqueue_1d(q, m.block_frames, n_visible);
       if (params.point_to_plane) {
         const auto t_inc = std::chrono::steady_clock::now();
         set_args(m.incidence, m.depth, K, mu, m.incidence_map);
@@ -414,7 +420,7 @@ size_t DeviceVoxelGrid::read_last_frame_into(VoxelBlockGrid& grid) const {
       m.staging_entries = cl::Buffer(m.ctx->context(), CL_MEM_READ_WRITE, m.staging_blocks * sizeof(Entry));
     }
     set_args(m.gather, m.visible, cl_uint(n), m.table, m.pool, m.staging, m.staging_entries);
-    q.enqueueNDRangeKernel(m.gather, cl::NullRange, cl::NDRange(n * HF_VOXELS_PER_BLOCK));
+    enqueue_1d(q, m.gather, n * HF_VOXELS_PER_BLOCK);
     std::vector<Entry> wanted(n);
     std::vector<Voxel> voxels(n * HF_VOXELS_PER_BLOCK);
     q.enqueueReadBuffer(m.staging, CL_FALSE, 0, voxels.size() * sizeof(Voxel), voxels.data());
