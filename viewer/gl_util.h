@@ -7,12 +7,31 @@
 #include <GL/glext.h>
 #include <GLFW/glfw3.h>
 
+#include <vector>
+
+#include "core/image.h"
 #include "viewer/view_controller.h"
 
 namespace hf::viewer {
 
 // Compiles and links a vertex + fragment shader pair; throws hf::Error with the compiler's log.
 GLuint link_program(const char* vertex_source, const char* fragment_source);
+
+// RGB images drawn over the current viewport (row 0 at the top, bilinear): the windows' photo and input panels.
+// Needs the current GL context for its whole life.
+class ImageQuad {
+ public:
+  explicit ImageQuad(int textures);
+  ~ImageQuad();
+  ImageQuad(const ImageQuad&) = delete;
+  ImageQuad& operator=(const ImageQuad&) = delete;
+  void upload(int texture, const ColorImage& image);
+  void draw(int texture) const;
+
+ private:
+  GLuint program_ = 0, vao_ = 0, vbo_ = 0;
+  std::vector<GLuint> textures_;
+};
 
 // The mouse half of the orbit camera: a left-button drag orbits (ViewController::drag) by the cursor's motion
 // since the last poll.

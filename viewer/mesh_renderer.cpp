@@ -98,6 +98,31 @@ void main() {
 }
 )";
 
+const char* kImageVertex = R"(#version 330 core
+layout(location = 0) in vec2 corner;
+out vec2 uv;
+void main() { uv = vec2(corner.x, 1.0 - corner.y); gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0); }
+)";
+const char* kImageFragment = R"(#version 330 core
+in vec2 uv;
+uniform sampler2D image;
+out vec4 frag;
+void main() { frag = vec4(texture(image, uv).rgb, 1.0); }
+)";
+
+// A vertex array of the unit square's corners as a triangle strip, attribute 0.
+void unit_square(GLuint* vao, GLuint* vbo) {
+  const float corners[] = {0, 0, 1, 0, 0, 1, 1, 1};
+  glGenVertexArrays(1, vao);
+  glGenBuffers(1, vbo);
+  glBindVertexArray(*vao);
+  glBindBuffer(GL_ARRAY_BUFFER, *vbo);
+  glBufferData(GL_ARRAY_BUFFER, sizeof corners, corners, GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 0, nullptr);
+  glBindVertexArray(0);
+}
+
 const char* kLineFragment = R"(#version 330 core
 uniform vec3 color;
 out vec4 frag;
@@ -119,15 +144,7 @@ MeshRenderer::MeshRenderer() : gl_(std::make_unique<Gl>()) {
   gl_->mesh_program = link_program(kMeshVertex, kMeshFragment);
   gl_->line_program = link_program(kLineVertex, kLineFragment);
   gl_->backdrop_program = link_program(kBackdropVertex, kBackdropFragment);
-  glGenVertexArrays(1, &gl_->backdrop_vao);
-  glGenBuffers(1, &gl_->backdrop_vbo);
-  const float corners[] = {0, 0, 1, 0, 0, 1, 1, 1};
-  glBindVertexArray(gl_->backdrop_vao);
-  glBindBuffer(GL_ARRAY_BUFFER, gl_->backdrop_vbo);
-  glBufferData(GL_ARRAY_BUFFER, sizeof corners, corners, GL_STATIC_DRAW);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 0, nullptr);
-  glBindVertexArray(0);
+  unit_square(&gl_->backdrop_vao, &gl_->backdrop_vbo);
   glGenTextures(2, gl_->backdrop_textures);
   for (GLuint t : gl_->backdrop_textures) {
     glBindTexture(GL_TEXTURE_2D, t);
@@ -303,6 +320,38 @@ ColorImage MeshRenderer::render(const PinholeCamera& camera, const SE3& T_world_
     for (int x = 0; x < camera.width; ++x) out(x, y) = {row[4 * x], row[4 * x + 1], row[4 * x + 2]};
   }
   return out;
+}
+
+ImageQuad::ImageQuad(int textures) : program_(link_program(kImageVertex, kImageFragment)), textures_(size_t(textures)) {
+  unit_square(&vao_, &vbo_);
+  glGenTextures(textures, textures_.data());
+  for (GLuint t : textures_) {
+    glBindTexture(GL_TEXTURE_2D, t);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  }
+}
+
+ImageQuad::~ImageQuad() {
+  glDeleteTextures(GLsizei(textures_.size()), textures_.data());
+  glDeleteBuffers(1, &vbo_);
+  glDeleteVertexArrays(1, &vao_);
+  glDeleteProgram(program_);
+}
+
+void ImageQuad::upload(int texture, const ColorImage& image) {
+  glBindTexture(GL_TEXTURE_2D, textures_[size_t(texture)]);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, image.width(), image.height(), 0, GL_RGB, GL_UNSIGNED_BYTE, image.data());
+}
+
+void ImageQuad::draw(int texture) const {
+  glDisable(GL_DEPTH_TEST);
+  glUseProgram(program_);
+  glBindVertexArray(vao_);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, textures_[size_t(texture)]);
+  glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
 }
 
 GLuint link_program(const char* vertex_source, const char* fragment_source) {

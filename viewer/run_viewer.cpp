@@ -21,18 +21,6 @@ namespace {
 
 constexpr int kWindowW = 1280, kWindowH = 720, kViewW = 853;  // the 3-D view takes the left two thirds
 
-const char* kQuadVertex = R"(#version 330 core
-layout(location = 0) in vec2 corner;
-out vec2 uv;
-void main() { uv = vec2(corner.x, 1.0 - corner.y); gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0); }
-)";
-const char* kQuadFragment = R"(#version 330 core
-in vec2 uv;
-uniform sampler2D image;
-out vec4 frag;
-void main() { frag = vec4(texture(image, uv).rgb, 1.0); }
-)";
-
 // The free camera's intrinsics for a viewport: a 60-degree-ish horizontal field of view.
 PinholeCamera view_camera(int w, int h) {
   PinholeCamera c;
@@ -230,22 +218,7 @@ void RunViewer::Impl::render_window(GlContext& context, MeshRenderer& renderer) 
   glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) {
     static_cast<Impl*>(glfwGetWindowUserPointer(w))->controller.scroll(dy);
   });
-  const GLuint quad = link_program(kQuadVertex, kQuadFragment);
-  GLuint vao = 0, vbo = 0, textures[2] = {0, 0};
-  const float corners[] = {0, 0, 1, 0, 0, 1, 1, 1};
-  glGenVertexArrays(1, &vao);
-  glGenBuffers(1, &vbo);
-  glBindVertexArray(vao);
-  glBindBuffer(GL_ARRAY_BUFFER, vbo);
-  glBufferData(GL_ARRAY_BUFFER, sizeof corners, corners, GL_STATIC_DRAW);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 0, nullptr);
-  glGenTextures(2, textures);
-  for (GLuint t : textures) {
-    glBindTexture(GL_TEXTURE_2D, t);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  }
+  ImageQuad panels(2);  // input colour, depth
   OrbitInput orbit(window);
   long seen = -1, model_seen = 0;
   bool mesh_loaded = false;
@@ -273,9 +246,7 @@ void RunViewer::Impl::render_window(GlContext& context, MeshRenderer& renderer) 
         for (int i = 0; i < 2; ++i) {
           const ColorImage img = i == 0 ? color : depth_as_grey(depth);
           if (img.empty()) continue;
-          glBindTexture(GL_TEXTURE_2D, textures[i]);
-          glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-          glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, img.width(), img.height(), 0, GL_RGB, GL_UNSIGNED_BYTE, img.data());
+          panels.upload(i, img);
         }
         glfwSetWindowTitle(window, (status + (controller.paused() ? "  [paused]" : "")).c_str());
       }
@@ -297,21 +268,13 @@ void RunViewer::Impl::render_window(GlContext& context, MeshRenderer& renderer) 
     // mouse with the next model view (at most 1 / kModelViewHz later).
     if (shown) renderer.draw(shown->first, shown->second, l, true);
     else renderer.draw(view_camera(vw, fh), controller.T_world_view(), l, true);
-    glDisable(GL_DEPTH_TEST);
-    glUseProgram(quad);
-    glBindVertexArray(vao);
     for (int i = 0; i < 2; ++i) {  // colour on top, depth below, each half of the right column
       glViewport(vw, i == 0 ? fh / 2 : 0, fw - vw, fh / 2);
-      glBindTexture(GL_TEXTURE_2D, textures[i]);
-      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+      panels.draw(i);
     }
     glfwSwapBuffers(window);
   }
   controller.key(Key::quit);  // a closed window ends the run (its outputs are written)
-  glDeleteTextures(2, textures);
-  glDeleteBuffers(1, &vbo);
-  glDeleteVertexArrays(1, &vao);
-  glDeleteProgram(quad);
 }
 
 RunViewer::RunViewer(const PinholeCamera& camera, const RunViewerOptions& options) : impl_(std::make_unique<Impl>()) {

@@ -14,18 +14,6 @@ namespace pg = photogrammetry;
 
 constexpr int kMaxW = 1280, kMaxH = 800;
 
-const char* kImageVertex = R"(#version 330 core
-layout(location = 0) in vec2 corner;
-out vec2 uv;
-void main() { uv = vec2(corner.x, 1.0 - corner.y); gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0); }
-)";
-const char* kImageFragment = R"(#version 330 core
-in vec2 uv;
-uniform sampler2D image;
-out vec4 frag;
-void main() { frag = vec4(texture(image, uv).rgb, 1.0); }
-)";
-
 std::string title(const pg::SketchSession& s) {
   std::string t = "hashfusion sketch  " + s.network().shots[size_t(s.shown_shot())].name;
   const pg::ModelledPolygon* p = s.current();
@@ -86,20 +74,7 @@ void run_sketch_window(pg::SketchSession& session) {
     st->session->click(window_to_image(x * to_fb, y * to_fb, st->scale));
     st->changed = true;
   });
-  const GLuint program = link_program(kImageVertex, kImageFragment);
-  GLuint vao = 0, vbo = 0, texture = 0;
-  const float corners[] = {0, 0, 1, 0, 0, 1, 1, 1};
-  glGenVertexArrays(1, &vao);
-  glGenBuffers(1, &vbo);
-  glBindVertexArray(vao);
-  glBindBuffer(GL_ARRAY_BUFFER, vbo);
-  glBufferData(GL_ARRAY_BUFFER, sizeof corners, corners, GL_STATIC_DRAW);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 0, nullptr);
-  glGenTextures(1, &texture);
-  glBindTexture(GL_TEXTURE_2D, texture);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  ImageQuad photo(1);
   int shown = -1, iw = 1, ih = 1;
   while (!glfwWindowShouldClose(window) && !state.quit) {
     glfwWaitEventsTimeout(1.0 / 30.0);
@@ -108,9 +83,7 @@ void run_sketch_window(pg::SketchSession& session) {
       const ColorImage overlay = session.overlay();
       iw = overlay.width();
       ih = overlay.height();
-      glBindTexture(GL_TEXTURE_2D, texture);
-      glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, iw, ih, 0, GL_RGB, GL_UNSIGNED_BYTE, overlay.data());
+      photo.upload(0, overlay);
       if (shown != session.shown_shot()) {  // a new shot: the window takes its aspect
         shown = session.shown_shot();
         const double s = std::min({1.0, double(kMaxW) / iw, double(kMaxH) / ih});
@@ -128,15 +101,9 @@ void run_sketch_window(pg::SketchSession& session) {
     // The image from the top-left corner at `scale` (GL's viewport origin is bottom-left).
     const int vw = int(iw * state.scale), vh = int(ih * state.scale);
     glViewport(0, fh - vh, vw, vh);
-    glUseProgram(program);
-    glBindVertexArray(vao);
-    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    photo.draw(0);
     glfwSwapBuffers(window);
   }
-  glDeleteTextures(1, &texture);
-  glDeleteBuffers(1, &vbo);
-  glDeleteVertexArrays(1, &vao);
-  glDeleteProgram(program);
 }
 
 }  // namespace hf::viewer

@@ -94,6 +94,17 @@ TEST(Viewer, ScreenshotNames) {
 
 namespace {
 
+// A camera with its principal point at the image centre.
+hf::PinholeCamera centred_camera(int width, int height, double f_px) {
+  hf::PinholeCamera c;
+  c.width = width;
+  c.height = height;
+  c.fx = c.fy = f_px;
+  c.cx = (width - 1) / 2.0;
+  c.cy = (height - 1) / 2.0;
+  return c;
+}
+
 // A 0.3 m sphere fused from five views on an arc, 1 cm voxels.
 hf::fusion::VoxelBlockGrid fused_sphere(const hf::PinholeCamera& camera, const Eigen::Vector3d& centre) {
   hf::fusion::VolumeParams params;
@@ -120,12 +131,7 @@ TEST(Viewer, GlRenderOfTheMeshMatchesTheCpuRaycast) {
   } catch (const hf::Error& e) {
     GTEST_SKIP() << "no display for OpenGL (run under xvfb-run): " << e.what();
   }
-  hf::PinholeCamera camera;
-  camera.width = 160;
-  camera.height = 120;
-  camera.fx = camera.fy = 130.0;
-  camera.cx = 79.5;
-  camera.cy = 59.5;
+  const hf::PinholeCamera camera = centred_camera(160, 120, 130.0);
   const Eigen::Vector3d centre(0.1, -0.05, 1.2);
   const hf::fusion::VoxelBlockGrid grid = fused_sphere(camera, centre);
   Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
@@ -182,12 +188,7 @@ TEST(Viewer, GlRenderOfTheMeshMatchesTheCpuRaycast) {
 // screenshot equals fusion::raycast of the same map from the same view (model_view_options()) at every pixel no
 // line covers; the lines cover at most one pixel per step of their longer image axis plus one per segment.
 TEST(Viewer, ScreenshotIsTheModelRaycastWithTheFrustum) {
-  hf::PinholeCamera camera;
-  camera.width = 320;
-  camera.height = 240;
-  camera.fx = camera.fy = 260.0;
-  camera.cx = 159.5;
-  camera.cy = 119.5;
+  const hf::PinholeCamera camera = centred_camera(320, 240, 260.0);
   const Eigen::Vector3d centre(0.1, -0.05, 1.2);
   const hf::fusion::VoxelBlockGrid grid = fused_sphere(camera, centre);
   Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
