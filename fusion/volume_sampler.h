@@ -96,6 +96,9 @@ class VolumeSampler {
     return region_;
   }
   bool observed(const Voxel* v) const { return v != nullptr && v->weight >= min_weight_raw_; }
+  // The raw SDF (int16 units: divide by HF_SDF_SCALE) of trilinear cell (i, j, k)'s eight corner voxels (corner
+  // c = x + 2 y + 4 z), or nullptr when one is unobserved; the cached gather sdf() uses, valid until the next call.
+  const float* cell_corners(int i, int j, int k) { return cell(i, j, k); }
 
   // Trilinear normalised SDF at p_vox; false when any of the eight voxels is unobserved.
   bool sdf(const Eigen::Vector3f& p_vox, float* sdf);

@@ -36,12 +36,10 @@ bool sdf_and_gradient(fusion::VolumeSampler& sampler, const Eigen::Vector3f& p_v
   const Eigen::Vector3f fl = p_vox.array().floor();
   const int i = int(fl.x()), j = int(fl.y()), k = int(fl.z());
   const float a = p_vox.x() - fl.x(), b = p_vox.y() - fl.y(), c = p_vox.z() - fl.z();
+  const float* raw = sampler.cell_corners(i, j, k);
+  if (raw == nullptr) return false;
   float f[8];
-  for (int n = 0; n < 8; ++n) {
-    const fusion::Voxel* v = sampler.voxel(i + (n & 1), j + ((n >> 1) & 1), k + (n >> 2));
-    if (!sampler.observed(v)) return false;
-    f[n] = hf_voxel_sdf(*v);
-  }
+  for (int n = 0; n < 8; ++n) f[n] = raw[n] * (1.0f / HF_SDF_SCALE);
   // Along x, then y, then z; the gradient is the derivative of the same polynomial.
   const float x00 = f[0] + a * (f[1] - f[0]), x10 = f[2] + a * (f[3] - f[2]);
   const float x01 = f[4] + a * (f[5] - f[4]), x11 = f[6] + a * (f[7] - f[6]);
@@ -127,7 +125,7 @@ class SdfMethod final : public DenseMethod {
   const DenseKernel& kernel() const override { return kKernel; }
   const void* params() const override { return &params_; }
   double rows_possible(const FramePyramidLevel& current) const override {
-    return double(count_valid_pixels(current.vertices));
+    return double(count_valid_pixels(current.vertices, options_.finest_level_step));
   }
   bool aligns_to_volume() const override { return true; }
   void set_volume(const fusion::VoxelBlockGrid* grid, const SE3& T_world_ref) override {
@@ -136,7 +134,11 @@ class SdfMethod final : public DenseMethod {
   }
   bool reads_reference() const override { return volume_ == nullptr; }
 
-  void begin_level(int, const FramePyramidLevel&, const FramePyramidLevel& reference, ResidualProblem&) override {
+  int pixel_step() const override { return level_ == 0 ? options_.finest_level_step : 1; }
+
+  void begin_level(int level, const FramePyramidLevel&, const FramePyramidLevel& reference,
+                   ResidualProblem&) override {
+    level_ = level;
     const fusion::VoxelBlockGrid* grid = volume_;
     SE3 T_world_ref = T_world_ref_;
     if (grid == nullptr) {  // pairwise: the reference level fused into a volume of its own, at the identity
@@ -162,6 +164,7 @@ class SdfMethod final : public DenseMethod {
 
   SdfOptions options_;
   SdfParams params_;
+  int level_ = 0;
   const fusion::VoxelBlockGrid* volume_ = nullptr;
   SE3 T_world_ref_;
   std::unique_ptr<fusion::VoxelBlockGrid> own_;
@@ -188,6 +191,7 @@ std::unique_ptr<Registration> make(const RegistrationOptions& options, std::uniq
 
 void SdfOptions::visit(OptionVisitor& v) {
   v("max_abs_sdf", max_abs_sdf);
+  v("finest_level_step", finest_level_step);
   v("min_voxel_weight", min_voxel_weight);
   v("robust_sdf", robust_sdf);
   v("huber_sdf_m", huber_sdf_m);
@@ -199,6 +203,7 @@ void SdfOptions::visit(OptionVisitor& v) {
 
 void SdfOptions::validate() const {
   require_option(max_abs_sdf > 0.0f && max_abs_sdf <= 1.0f, "max_abs_sdf must be in (0, 1]");
+  require_option(finest_level_step >= 1 && finest_level_step <= 16, "finest_level_step must be in [1, 16]");
   require_option(std::isfinite(min_voxel_weight) && min_voxel_weight >= 0.0f, "min_voxel_weight must be >= 0");
   require_option(finite_positive(huber_sdf_m), "huber_sdf_m must be finite and > 0");
   require_option(finite_positive(t_sigma_sdf_m), "t_sigma_sdf_m must be finite and > 0");
