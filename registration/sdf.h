@@ -40,8 +40,8 @@ struct SdfOptions : MethodOptionsBase<SdfOptions> {
   float t_dof_sdf = 5.0f;
   // The volume the method fuses the reference into when no map was set (pairwise use). 6 voxels, not the map's 4:
   // on the noisy room pair of tests/registration/test_accuracy.cpp 2.81 vs 3.08 mm at finest_level_step 1 (2.67
-  // mm at 2; the wider band
-  // averages a one-frame field over more depth); 5 mm voxels halve the basin and miss the 9.6 mm motion (8 mm).
+  // mm at 2; the wider band averages a one-frame field over more depth); 5 mm voxels halve the basin and miss the
+  // 9.6 mm motion (8 mm).
   double own_voxel_m = 0.01;
   double own_truncation_vox = 6.0;
 
