@@ -101,4 +101,12 @@ FramePyramid build_model_pyramid(const VertexMap& vertices, const NormalMap& nor
   return pyramid;
 }
 
+DepthImage depth_of(const VertexMap& vertices) {
+  DepthImage d(vertices.width(), vertices.height(), 0.0f);
+  for (int y = 0; y < vertices.height(); ++y)
+    for (int x = 0; x < vertices.width(); ++x)
+      if (vertices(x, y).w != 0.0f) d(x, y) = vertices(x, y).z;
+  return d;
+}
+
 }  // namespace hf

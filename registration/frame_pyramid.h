@@ -56,6 +56,9 @@ struct FramePyramidOptions {
 FramePyramid build_frame_pyramid(const DepthImage& depth, const ColorImage* color, const PinholeCamera& camera,
                                  const FramePyramidOptions& options = {});
 
+// The z of a vertex map as a depth image (0 where invalid): e.g. a pyramid level's depth, to fuse or compare.
+DepthImage depth_of(const VertexMap& vertices);
+
 // From model maps (e.g. a raycast; camera frame of the raycast camera) and an optional intensity image. Level 0
 // uses the maps as given; coarser levels re-derive vertices and normals from the depth-aware pyramid of the
 // vertices' z. Same errors as build_frame_pyramid.

@@ -106,15 +106,6 @@ DenseKernel make_sdf_kernel() {
 }
 const DenseKernel kKernel = make_sdf_kernel();
 
-// The z of a vertex map as a depth image (0 where invalid).
-DepthImage depth_of(const VertexMap& vertices) {
-  DepthImage d(vertices.width(), vertices.height(), 0.0f);
-  for (int y = 0; y < vertices.height(); ++y)
-    for (int x = 0; x < vertices.width(); ++x)
-      if (vertices(x, y).w != 0.0f) d(x, y) = vertices(x, y).z;
-  return d;
-}
-
 class SdfMethod final : public DenseMethod {
  public:
   explicit SdfMethod(const SdfOptions& options) : options_(options) {

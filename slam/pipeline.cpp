@@ -30,10 +30,11 @@ struct Consistency {
   long sampled = 0, overlap = 0, consistent = 0;
 };
 
-Consistency depth_consistency(const VertexMap& current, const DepthImage& reference_depth, const PinholeCamera& cam,
-                              const SE3& T_ref_cur, double voxel_m) {
-  const Eigen::Matrix3f R = T_ref_cur.rotation().cast<float>();
-  const Eigen::Vector3f t = T_ref_cur.translation().cast<float>();
+// Every 4th pixel of `current` in x and y, moved by T (float): agree(p, z_cur) returns -1 (no overlap), 0 or 1.
+template <class Agree>
+Consistency sample_consistency(const VertexMap& current, const SE3& T, Agree agree) {
+  const Eigen::Matrix3f R = T.rotation().cast<float>();
+  const Eigen::Vector3f t = T.translation().cast<float>();
   Consistency c;
   constexpr int kStride = 4;
   for (int y = kStride / 2; y < current.height(); y += kStride) {
@@ -41,18 +42,26 @@ Consistency depth_consistency(const VertexMap& current, const DepthImage& refere
       const hf_float4& v = current(x, y);
       if (v.w == 0.0f) continue;
       ++c.sampled;
-      const Eigen::Vector3f p = R * Eigen::Vector3f(v.x, v.y, v.z) + t;
-      if (!(p.z() > 0.0f)) continue;
-      const Eigen::Vector2d px = cam.project(p.cast<double>());
-      const int u = int(std::lround(px.x())), w = int(std::lround(px.y()));
-      if (u < 0 || w < 0 || u >= cam.width || w >= cam.height) continue;
-      const float d_ref = reference_depth(u, w);
-      if (!(d_ref > 0.0f)) continue;
+      const int a = agree(Eigen::Vector3f(R * Eigen::Vector3f(v.x, v.y, v.z) + t), v.z);
+      if (a < 0) continue;
       ++c.overlap;
-      c.consistent += std::abs(d_ref - p.z()) <= 3.0f * hf_kinect_axial_sigma_m(p.z()) + float(voxel_m);
+      c.consistent += a;
     }
   }
   return c;
+}
+
+Consistency depth_consistency(const VertexMap& current, const DepthImage& reference_depth, const PinholeCamera& cam,
+                              const SE3& T_ref_cur, double voxel_m) {
+  return sample_consistency(current, T_ref_cur, [&](const Eigen::Vector3f& p, float) {
+    if (!(p.z() > 0.0f)) return -1;
+    const Eigen::Vector2d px = cam.project(p.cast<double>());
+    const int u = int(std::lround(px.x())), w = int(std::lround(px.y()));
+    if (u < 0 || w < 0 || u >= cam.width || w >= cam.height) return -1;
+    const float d_ref = reference_depth(u, w);
+    if (!(d_ref > 0.0f)) return -1;
+    return int(std::abs(d_ref - p.z()) <= 3.0f * hf_kinect_axial_sigma_m(p.z()) + float(voxel_m));
+  });
 }
 
 // depth_consistency's question asked of the map itself, for a primary method that aligns to the volume (no
@@ -60,36 +69,14 @@ Consistency depth_consistency(const VertexMap& current, const DepthImage& refere
 // agrees where its distance to the surface there is within the same noise bound.
 Consistency volume_consistency(const VertexMap& current, const fusion::VoxelBlockGrid& grid,
                                const SE3& T_world_cur) {
-  const Eigen::Matrix3f R = T_world_cur.rotation().cast<float>();
-  const Eigen::Vector3f t = T_world_cur.translation().cast<float>();
   const float inv_voxel = float(1.0 / grid.params().voxel_m), mu = float(grid.params().truncation_m());
   fusion::VolumeSampler sampler(grid, 0.0f, false);
-  Consistency c;
-  constexpr int kStride = 4;
-  for (int y = kStride / 2; y < current.height(); y += kStride) {
-    for (int x = kStride / 2; x < current.width(); x += kStride) {
-      const hf_float4& v = current(x, y);
-      if (v.w == 0.0f) continue;
-      ++c.sampled;
-      const Eigen::Vector3f p = R * Eigen::Vector3f(v.x, v.y, v.z) + t;
-      float s = 0.0f;
-      if (!sampler.sdf(p * inv_voxel - Eigen::Vector3f::Constant(0.5f), &s)) continue;
-      ++c.overlap;
-      c.consistent += std::abs(s * mu) <= 3.0f * hf_kinect_axial_sigma_m(v.z) + 1.0f / inv_voxel;
-    }
-  }
-  return c;
+  return sample_consistency(current, T_world_cur, [&](const Eigen::Vector3f& p, float z_cur) {
+    float s = 0.0f;
+    if (!sampler.sdf(p * inv_voxel - Eigen::Vector3f::Constant(0.5f), &s)) return -1;
+    return int(std::abs(s * mu) <= 3.0f * hf_kinect_axial_sigma_m(z_cur) + 1.0f / inv_voxel);
+  });
 }
-
-// The z of a vertex map as a depth image (0 where invalid).
-DepthImage depth_of(const VertexMap& v) {
-  DepthImage d(v.width(), v.height(), 0.0f);
-  for (int y = 0; y < v.height(); ++y)
-    for (int x = 0; x < v.width(); ++x)
-      if (v(x, y).w != 0.0f) d(x, y) = v(x, y).z;
-  return d;
-}
-
 
 }  // namespace
 

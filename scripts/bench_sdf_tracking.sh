@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# scripts/bench_sdf_tracking.sh OUT_DIR: `sdf` (volume tracking, no tracking raycast) against `combined` (the
+# default) and `icp` on every real sequence in ../shared/data, through `hashfusion run` with the defaults otherwise.
+# The three methods run interleaved per input, so machine load affects them alike. Writes OUT_DIR/sdf_tracking.md.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+out="${1:-out/bench_sdf_tracking}"
+hf="${HF_BIN:-build/release/apps/hashfusion}"  # HF_BIN: a copy, so a rebuild mid-run changes nothing
+shared="../shared/data"
+[[ -x "$hf" ]] || { echo "bench_sdf_tracking: build first ($hf missing)" >&2; exit 1; }
+[[ -d "$shared" ]] || { echo "bench_sdf_tracking: $shared is absent" >&2; exit 1; }
+mkdir -p "$out/runs"
+for input in tum_fr1_rpy_first150 tum_fr1_rpy_frames150_269 tum_fr1_desk_9frames 7scenes_tsdf_fusion_first200; do
+  for method in sdf combined icp; do
+    echo "bench_sdf_tracking: $input $method" >&2
+    "$hf" run --input "$shared/$input" --out "$out/runs/${input}__$method" --registration "$method" \
+      > /dev/null 2> "$out/runs/${input}__$method.log" || echo "  failed (see the log)" >&2
+  done
+done
+python3 - "$out" "$(uptime)" <<'PY'
+import json, os, sys
+out, load = sys.argv[1], sys.argv[2]
+rows = ["| input | method | frames | lost | fallback | ATE cm | RPE cm/s | fps | track ms | raycast ms | total ms |",
+        "|---|---|---|---|---|---|---|---|---|---|---|"]
+for d in sorted(os.listdir(os.path.join(out, "runs"))):
+    f = os.path.join(out, "runs", d, "report.json")
+    if not os.path.isfile(f):
+        continue
+    r = json.load(open(f))
+    name, method = d.split("__")
+    ms = r["ms_per_frame"]
+    cm = lambda v: "-" if v is None else f"{v * 100:.2f}"
+    rows.append(f"| {name} | {method} | {r['frames']} | {r['frames_lost']} | {r['frames_fallback']} | "
+                f"{cm(r.get('ate_rmse_m'))} | {cm(r.get('rpe_trans_m_per_s'))} | {r['fps']:.1f} | {ms['track']:.1f} | "
+                f"{ms['raycast']:.1f} | {ms['total']:.1f} |")
+open(os.path.join(out, "sdf_tracking.md"), "w").write("\n".join(rows) + f"\n\nLoad at the end: {load}\n")
+print("\n".join(rows))
+PY
