@@ -94,12 +94,13 @@ struct MethodProblem {
     method = test::method_under_test(name, options, make_backend("cpu"));
     if (method.dense != nullptr) problem = method.dense->level_problem(cur, ref, 0, kOffset);
   }
-  // Photometric rows on every pixel.
+  // Rows on every pixel (photometric's and sdf's finest-level grids at 1).
   MethodProblem(const RandomMaps& maps, const std::string& name) : MethodProblem(maps, name, every_pixel(name)) {}
 
   static RegistrationOptions every_pixel(const std::string& name) {
     RegistrationOptions o = default_registration_options(name);
     o.set("finest_level_photometric_step", 1);
+    o.set("finest_level_step", 1);
     return o;
   }
 };
