@@ -66,7 +66,9 @@ struct VoxelBlockGrid::Impl {
     for (std::uint32_t s = 0; s < next_slot; ++s)
       if (slot_live(s)) f(s);
   }
-  bool slot_live(std::uint32_t s) const { return slot_of(slot_coord(s)) == s; }
+  // A released slot's coordinate reads kFreeSlot (release() marks it), so listings need no hash look-up per slot.
+  bool slot_live(std::uint32_t s) const { return slot_coord(s).x != kFreeSlot; }
+  static constexpr int kFreeSlot = INT_MIN;
 
   std::mutex create_mutex;  // serialises allocate()'s writers; taken by the whole-grid listings too
   std::vector<std::unique_ptr<VoxelBlock[]>> chunks;
@@ -114,6 +116,7 @@ VoxelBlock* VoxelBlockGrid::allocate(const BlockCoord& c, bool* created, std::ui
     return impl_->slot_block(slot);
   };
   if (const std::uint32_t slot = impl_->slot_of(c); slot != UINT32_MAX) return found(slot);
+  if (c.x == Impl::kFreeSlot) throw Error("voxel block grid: block x coordinate INT_MIN is out of range");
   std::lock_guard lock(impl_->create_mutex);
   // Another thread may have created it since the look-up above.
   if (const std::uint32_t slot = impl_->slot_of(c); slot != UINT32_MAX) return found(slot);
@@ -158,6 +161,7 @@ bool VoxelBlockGrid::release(const BlockCoord& c) {
   const std::uint32_t value = impl_->table.erase(c.x, c.y, c.z);
   if (value == 0) return false;
   impl_->free_slots.push_back(value - 1);
+  impl_->slot_coord(value - 1).x = Impl::kFreeSlot;
   const int rx = c.x >> kRegionShift, ry = c.y >> kRegionShift, rz = c.z >> kRegionShift;
   const std::uint32_t n = impl_->regions.find(rx, ry, rz);
   if (n > 1)
