@@ -145,11 +145,19 @@ class SdfMethod final : public DenseMethod {
   }
 
  private:
+  // One volume kept across calls and cleared (its pool chunks stay allocated): pairwise use registers every
+  // keyframe pair this way. 2^16 blocks hold one frame's band at any tracking resolution (a 640x480 frame of a
+  // room touches ~10^4); more is a CapacityError, which the driver reports as a failed registration.
   void fuse_reference(const FramePyramidLevel& reference) {
-    fusion::VolumeParams vp;
-    vp.voxel_m = options_.own_voxel_m;
-    vp.truncation_vox = options_.own_truncation_vox;
-    own_ = std::make_unique<fusion::VoxelBlockGrid>(vp);
+    if (own_ == nullptr) {
+      fusion::VolumeParams vp;
+      vp.voxel_m = options_.own_voxel_m;
+      vp.truncation_vox = options_.own_truncation_vox;
+      vp.capacity_blocks = 1 << 16;
+      own_ = std::make_unique<fusion::VoxelBlockGrid>(vp);
+    } else {
+      own_->clear();
+    }
     fusion::integrate(*own_, depth_of(reference.vertices), ColorImage(), reference.camera, SE3());
   }
 
