@@ -78,6 +78,18 @@ Consistency volume_consistency(const VertexMap& current, const fusion::VoxelBloc
   });
 }
 
+// The intensity levels of `from` move onto the levels `to` has (the photometric reference); nothing else of
+// `from` is needed again.
+void take_intensity(FramePyramid& from, FramePyramid* to) {
+  for (int l = 0; l < to->num_levels() && l < from.num_levels(); ++l) {
+    FramePyramidLevel& dst = to->levels[size_t(l)];
+    FramePyramidLevel& src = from.levels[size_t(l)];
+    dst.intensity = std::move(src.intensity);
+    dst.grad_x = std::move(src.grad_x);
+    dst.grad_y = std::move(src.grad_y);
+  }
+}
+
 }  // namespace
 
 const char* to_string(TrackState state) {
@@ -103,8 +115,10 @@ struct Pipeline::Reference {
   FramePyramid pyramid;          // model vertices/normals per level + the last frame's intensity/gradients
   bool valid = false;
   // The primary method aligns to the map itself (Registration::aligns_to_volume): the pose moved on without a
-  // raycast, so model and pyramid are not of T_world_model; cast on demand (ensure_reference_maps).
+  // raycast, so model and pyramid are not of T_world_model; cast on demand (ensure_reference_maps), with the
+  // last frame's intensity levels kept here meanwhile.
   bool stale = false;
+  FramePyramid frame_intensity;
 };
 
 // What decide() concluded for one frame; applied by process() only after it is final.
@@ -565,6 +579,9 @@ void Pipeline::raycast_reference(FramePyramid& current, const SE3& T_world_cur, 
   if (registration_ && registration_->aligns_to_volume()) {
     reference_->T_world_model = T_world_cur;
     reference_->stale = true;
+    // Kept for a photometric fallback: ensure_reference_maps puts it on the maps it casts.
+    reference_->frame_intensity.levels.resize(size_t(current.num_levels()));
+    take_intensity(current, &reference_->frame_intensity);
     reference_->valid = grid_.block_count() > 0;
     r->ms.raycast = ms_since(t0);
     return;
@@ -600,14 +617,7 @@ void Pipeline::raycast_reference(FramePyramid& current, const SE3& T_world_cur, 
   reference_->T_world_model = T_world_cur;
   reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
                                             tracking_camera_, config_.pyramid.levels);
-  // The frame's intensity levels become the photometric reference; nothing else of it is needed again.
-  for (int l = 0; l < reference_->pyramid.num_levels() && l < current.num_levels(); ++l) {
-    FramePyramidLevel& dst = reference_->pyramid.levels[size_t(l)];
-    FramePyramidLevel& src = current.levels[size_t(l)];
-    dst.intensity = std::move(src.intensity);
-    dst.grad_x = std::move(src.grad_x);
-    dst.grad_y = std::move(src.grad_y);
-  }
+  take_intensity(current, &reference_->pyramid);
   reference_->valid = reference_->model.hit_count > 0;
   reference_->stale = false;
   r->ms.raycast = ms_since(t0);
@@ -618,6 +628,7 @@ void Pipeline::ensure_reference_maps() {
   fusion::raycast(grid_, tracking_camera_, reference_->T_world_model, config_.raycast, &reference_->model);
   reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
                                             tracking_camera_, config_.pyramid.levels);
+  take_intensity(reference_->frame_intensity, &reference_->pyramid);
   reference_->stale = false;
 }
 
