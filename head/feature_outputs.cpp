@@ -113,7 +113,11 @@ nlohmann::json control_points_json(const HeadFeatureResult& r) {
   nlohmann::json missing = nlohmann::json::array();
   for (const std::string& n : control_point_names())
     if (std::find(found.begin(), found.end(), n) == found.end()) missing.push_back(n);
-  return {{"frame", "input mesh"}, {"control_points", points}, {"missing", missing}};
+  // Why an area's points are absent (an ear under hair), from the area detection; empty where not known.
+  nlohmann::json absent = nlohmann::json::object();
+  for (int a = 1; a < kAreaCount; ++a)
+    if (r.areas.counts[a] == 0 && !r.areas.note[a].empty()) absent[area_name(static_cast<Area>(a))] = r.areas.note[a];
+  return {{"frame", "input mesh"}, {"control_points", points}, {"missing", missing}, {"absent_areas", absent}};
 }
 
 nlohmann::json report_json(const TriangleMesh& mesh, const HeadFeatureResult& r, const HeadFeatureOptions& o,
@@ -142,7 +146,8 @@ nlohmann::json report_json(const TriangleMesh& mesh, const HeadFeatureResult& r,
   nlohmann::json areas;
   for (int a = 0; a < kAreaCount; ++a)
     areas[area_name(static_cast<Area>(a))] = {{"vertices", r.areas.counts[a]},
-                                              {"threshold_percent", r.area_features.threshold_percent[a]}};
+                                              {"threshold_percent", r.area_features.threshold_percent[a]},
+                                              {"note", r.areas.note[a]}};
   long features = std::count(r.features.begin(), r.features.end(), 1);
   j["important_areas"] = {{"k", r.areas.k},
                           {"mean_curvature_threshold", r.areas.threshold},

@@ -118,8 +118,13 @@ HeadFeatureResult detect_head_features(const TriangleMesh& mesh, const HeadFeatu
     // Control points always come from the area-specific features: the manual features need not cover an area.
     r.control_points = find_control_points(mesh, r.topology, r.frame, r.areas, r.area_features.features);
   }
-  for (int a = 1; a < kAreaCount; ++a)
-    if (r.areas.counts[a] == 0) r.warnings.push_back(std::string("area ") + area_name(static_cast<Area>(a)) + " not found");
+  for (int a = 1; a < kAreaCount; ++a) {
+    const std::string name = area_name(static_cast<Area>(a));
+    if (r.areas.counts[a] == 0)
+      r.warnings.push_back("area " + name + " not found" + (r.areas.note[a].empty() ? "" : ": " + r.areas.note[a]));
+    else if (!r.areas.note[a].empty() && (a != static_cast<int>(Area::eye_left)))  // the eyes share one note
+      r.warnings.push_back("area " + name + ": " + r.areas.note[a]);
+  }
   return r;
 }
 

@@ -3,15 +3,19 @@
 //   1. F = {valid v : H(v) >= mean H} (the threshold is the average evaluation);
 //   2. close^k, open^k, close^k, then (optionally) dilate^k, with k = 5 for N <= 13000 vertices, 10 up to 20000,
 //      15 above (the paper's experimental choice; `k` overrides it);
-//   3. the face area and the ears, bounded by boxes in the head frame (sizes in rho, head_frame.h; see
-//      important_areas.cpp for why the paper's connectivity alone does not separate them on scans);
+//   3. the face area, bounded by a box in the head frame (sizes in rho, head_frame.h), and the ears: per side the
+//      largest thin-sheet piece (a flap: surface facing the other way right behind it, the pinna) beside and behind
+//      the face, when it spans at least 1 rho; a side without one (hair, not scanned) has no ear area and `note`
+//      says why (important_areas.cpp has the why of both);
 //   4. the face area is split in the head frame (head_frame.h; x towards the subject's right, y towards the
 //      nose, z up, origin at the nose tip). Method 1 (distance): eyes/nose boundary at half the height of the
 //      face area's widest point (max |x|), nose/lips boundary two thirds of the way from the tip down to the
 //      face area's lowest point. Method 2: as method 1, but the nose is every mesh vertex in the box between the
 //      nose/lips boundary and the eyes/nose boundary, in front of the nose root (the deepest point of the profile
 //      above the tip), as wide as the face area is in that band near the tip (the area of fig. 5). The eyes
-//      leave out the bridge between them (|x| under half the nose's half-width).
+//      leave out the bridge between them (|x| under half the nose's half-width). When the morphology left an eye
+//      side (nearly) empty (a decimated mesh), both eyes are the face's band above the eyes/nose boundary instead
+//      (`note` says so).
 // Labels are per vertex; every vertex has exactly one (none where no area).
 #pragma once
 
@@ -46,6 +50,9 @@ struct ImportantAreas {
   // Boundaries in head-frame z (mean edge lengths below/above the tip).
   double z_eyes_nose = 0, z_nose_lips = 0;
   std::array<int, kAreaCount> counts{};
+  // Per area, why it is absent or how it was found when not by the steps above (empty otherwise): an ear side
+  // without an ear-like flap (hair, not scanned), the eyes' fallback band on a mesh whose morphology removed them.
+  std::array<std::string, kAreaCount> note{};
 };
 
 int paper_k_for_vertex_count(int n);
