@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <string>
+#include <vector>
 #include <random>
 
 #include "head/head_features.h"
@@ -90,15 +92,36 @@ INSTANTIATE_TEST_SUITE_P(HeadMeshes, HeadFrameOnRealHeads,
                            return n.substr(0, n.find('.'));
                          });
 
-// Control points on the two heads where every area is found (bench/results/head.md: on the decimated Max Planck
-// bust the eyes are not separated, on Igea a scan crack beside the mouth and the hair make lips and ears
-// asymmetric).
-class RealHead : public ::testing::TestWithParam<const char*> {};
+// Control points on every head. What each head has, and what it is held to:
+//   every head: the nose, eyes and lips are found; the nose tip, root and subnasale lie on the plane; eyes above
+//     the tip above the lip corners; the same vertices after a random rigid motion and uniform scale;
+//   ears: found on libigl, Max Planck and Nefertiti (a flap, important_areas.h); absent on Igea, whose ears are
+//     under hair: no ear area, no ear control point, and the reason in the areas' note and in the warnings;
+//   symmetry: a point and its mirror partner have opposite x and equal y, z within rho (the tip's scale, ~2 cm:
+//     features are thresholded vertex sets whose borders move by whole rings, and rho spans 3 (Max Planck) to 15
+//     (Igea) rings) on each axis, except the pairs bench/results/head.md measures as asymmetric, held to 1.6 rho:
+//     Max Planck's eyes and lips (1.1 and 1.5 rho: 5272 vertices, 3 edges per rho, the eyes from the fallback
+//     band) and Igea's eyes and lips (1.3 and 1.0 rho: a scan crack beside the mouth, the left eye's features
+//     reach the side of the nose).
+struct HeadCase {
+  const char* file;
+  bool ears;
+  std::vector<std::string> loose;  // areas (name before the '.') held to 1.6 rho instead of rho
+};
 
+class RealHead : public ::testing::TestWithParam<HeadCase> {};
+
+std::string area_of(const std::string& name) {
+  std::string a = name.substr(0, name.find('.'));
+  for (const char* side : {"_right", "_left"})
+    if (a.ends_with(side)) a = a.substr(0, a.size() - std::string(side).size());
+  return a;
+}
 
 TEST_P(RealHead, SymmetricOrderedAndStableUnderSimilarity) {
-  if (!std::filesystem::exists(kDir + GetParam())) GTEST_SKIP() << kDir << GetParam() << " not found (../shared absent)";
-  const TriangleMesh mesh = load(GetParam());
+  const HeadCase& hc = GetParam();
+  if (!std::filesystem::exists(kDir + hc.file)) GTEST_SKIP() << kDir << hc.file << " not found (../shared absent)";
+  const TriangleMesh mesh = load(hc.file);
   HeadFeatureOptions options;
   options.automatic = true;
   const HeadFeatureResult r = detect_head_features(mesh, options);
@@ -106,30 +129,54 @@ TEST_P(RealHead, SymmetricOrderedAndStableUnderSimilarity) {
   ASSERT_TRUE(points.count("nose.tip"));
   auto head = [&](const std::string& n) { return r.frame.to_head(points.at(n).position); };  // mean edge lengths
 
-  // Symmetry: a point and its mirror partner have opposite x and equal y, z. The features are thresholded
-  // vertex sets, so the tolerance is in mesh resolution: rho (the tip's scale, ~2 cm) on each axis, in edges.
+  // What is found, and the documented absence.
+  for (Area a : {Area::eye_right, Area::eye_left, Area::nose, Area::lips})
+    EXPECT_GT(r.areas.counts[static_cast<int>(a)], 0) << area_name(a);
+  for (Area a : {Area::ear_right, Area::ear_left}) {
+    const int i = static_cast<int>(a);
+    if (hc.ears) {
+      EXPECT_GT(r.areas.counts[i], 0) << area_name(a);
+      EXPECT_TRUE(r.areas.note[i].empty()) << r.areas.note[i];
+    } else {
+      EXPECT_EQ(r.areas.counts[i], 0) << area_name(a) << " should be absent (hair)";
+      EXPECT_NE(r.areas.note[i].find("no ear-like flap"), std::string::npos) << r.areas.note[i];
+      const std::string name = area_name(a);
+      bool warned = false;
+      for (const std::string& w : r.warnings) warned |= w.find(name) != std::string::npos && w.find("flap") != std::string::npos;
+      EXPECT_TRUE(warned) << "no warning names the absent " << name;
+    }
+  }
+  size_t expected = 0;
+  for (const std::string& n : control_point_names()) expected += hc.ears || n.find("ear") == std::string::npos;
+  int ear_points = 0;
+  for (const auto& [name, c] : points) ear_points += name.starts_with("ear");
+  EXPECT_EQ(ear_points, hc.ears ? 10 : 0);
+  EXPECT_EQ(points.size(), expected);
+
+  // Symmetry.
   const double rho_edges = r.frame.cap_scale * r.frame.scale;
   int pairs = 0;
   for (const auto& [name, c] : points) {
     const std::string other = mirrored(name);
     if (other.empty() || !points.count(other) || name.find("right") == std::string::npos) continue;
-    if (name.find("ear") != std::string::npos) continue;  // ears: see the report; not held to symmetry here
+    const bool loose = std::find(hc.loose.begin(), hc.loose.end(), area_of(name)) != hc.loose.end();
+    const double tol = (loose ? 1.6 : 1.0) * rho_edges;
     const Eigen::Vector3d a = head(name), b = head(other);
-    std::printf("%-28s x %+7.1f/%+7.1f  y %+7.1f/%+7.1f  z %+7.1f/%+7.1f (edges)\n", name.c_str(), a.x(), b.x(), a.y(),
-                b.y(), a.z(), b.z());
-    EXPECT_NEAR(a.x(), -b.x(), rho_edges) << name;
-    EXPECT_NEAR(a.y(), b.y(), rho_edges) << name;
-    EXPECT_NEAR(a.z(), b.z(), rho_edges) << name;
+    std::printf("%-24s x %+7.1f/%+7.1f  y %+7.1f/%+7.1f  z %+7.1f/%+7.1f (edges; tolerance %.1f)\n", name.c_str(), a.x(),
+                b.x(), a.y(), b.y(), a.z(), b.z(), tol);
+    EXPECT_NEAR(a.x(), -b.x(), tol) << name;
+    EXPECT_NEAR(a.y(), b.y(), tol) << name;
+    EXPECT_NEAR(a.z(), b.z(), tol) << name;
     EXPECT_GT(a.x(), 0) << name << " lies on the subject's right (+x)";
     ++pairs;
   }
-  EXPECT_GE(pairs, 6);
-  // Profile points lie on the plane.
+  EXPECT_EQ(pairs, hc.ears ? 18 : 13);  // 10 eye pairs, the lip corners, 2 nose pairs, 5 ear pairs
+  // Profile points lie on the plane (within the profile band of 1.5 edges and one more edge of rounding).
   for (const char* n : {"nose.tip", "nose.root", "nose.subnasale"})
     if (points.count(n)) {
-      EXPECT_LT(std::abs(head(n).x()), 2.0) << n;
+      EXPECT_LT(std::abs(head(n).x()), 2.5) << n;
     }
-  // Order: eyes above the nose tip above the lips' corners.
+  // Order: eyes above the nose tip above the lips' corners; ears behind the face.
   for (const char* n : {"eye_right.corner_inner", "eye_left.corner_inner", "eye_right.corner_outer", "eye_left.corner_outer"}) {
     ASSERT_TRUE(points.count(n)) << n;
     EXPECT_GT(head(n).z(), 0.0) << n;
@@ -138,14 +185,19 @@ TEST_P(RealHead, SymmetricOrderedAndStableUnderSimilarity) {
     ASSERT_TRUE(points.count(n)) << n;
     EXPECT_LT(head(n).z(), 0.0) << n;
   }
-  // The nose tip is the foremost point of the face (within the nose's own curvature scale).
+  for (const auto& [name, c] : points)
+    if (name.starts_with("ear")) {
+      EXPECT_LT(head(name).y(), head("eye_right.corner_outer").y()) << name << " lies behind the eyes";
+    }
   EXPECT_NEAR(head("nose.tip").y(), 0.0, 1e-6);
 
   // Stability: a random rotation, translation and scale of the input finds the same points.
   const TriangleMesh moved = moved_copy(mesh, r.frame.mean_edge_length, 11);
   const HeadFeatureResult rm = detect_head_features(moved, options);
   EXPECT_TRUE(same_point(mesh, rm.frame.nose_tip_vertex, r.frame.nose_tip_vertex, r.frame.mean_edge_length));
+  EXPECT_EQ(rm.areas.counts, r.areas.counts);
   const auto moved_points = by_name(rm);
+  EXPECT_EQ(moved_points.size(), points.size());
   int same = 0, exact = 0;
   for (const auto& [name, c] : points) {
     if (!moved_points.count(name)) continue;
@@ -154,15 +206,19 @@ TEST_P(RealHead, SymmetricOrderedAndStableUnderSimilarity) {
   }
   std::printf("%d of %zu control points on the same vertex after the motion, %d within one edge\n", exact,
               points.size(), same);
-  // Every stage is pose-invariant (the frame's sectors, k-rings, thresholds at averages); only float rounding of
-  // the moved positions can flip a tie. Measured: 51 of 52 exactly on libigl, 52 of 52 on Nefertiti.
+  // Every stage is pose-invariant (the frame's sectors, k-rings, thresholds at averages, the flap test's
+  // distances); only float rounding of the moved positions can flip a tie.
   EXPECT_GE(exact, static_cast<int>(points.size()) - 2);
   EXPECT_GE(same, static_cast<int>(points.size()) - 2);
 }
 
-INSTANTIATE_TEST_SUITE_P(HeadMeshes, RealHead, ::testing::Values("libigl_face_head.obj", "nefertiti.obj"),
+INSTANTIATE_TEST_SUITE_P(HeadMeshes, RealHead,
+                         ::testing::Values(HeadCase{"libigl_face_head.obj", true, {}},
+                                           HeadCase{"nefertiti.obj", true, {}},
+                                           HeadCase{"max_planck_decimated.obj", true, {"eye", "lips"}},
+                                           HeadCase{"igea_tristrips.ply", false, {"eye", "lips"}}),
                          [](const auto& info) {
-                           std::string n = info.param;
+                           std::string n = info.param.file;
                            return n.substr(0, n.find('.'));
                          });
 
