@@ -10,6 +10,8 @@
 //                               alloc + update), update_GB/s (16 bytes read and written per voxel over update_ms) and
 //                               its fraction of the copy bandwidth of the same device measured in this run
 //   BM_ReadLastFrame            read_last_frame_into: what the pipeline's host copy of the map costs per frame
+//   BM_Raycast/<0 cpu|1 dev>    the tracking raycast of the fused map from the next frames' poses, raycast() against
+//                               DeviceVoxelGrid::raycast (range_ms, march_ms, read_ms: its stages)
 //   BM_Pipeline/<0 cpu|1 opencl> whole slam::Pipeline frames (combined registration) per backend: ms per stage
 //                               and fps, over kPipelineFrames frames after the first
 #include <benchmark/benchmark.h>
@@ -24,6 +26,7 @@
 #include "bench/room_frames.h"
 #include "datasets/synthetic_sequence.h"
 #include "fusion/integrate.h"
+#include "fusion/raycast.h"
 #include "fusion/opencl/device_voxel_grid.h"
 #include "registration/opencl/opencl_context.h"
 #include "slam/pipeline.h"
@@ -133,6 +136,51 @@ void BM_ReadLastFrame(benchmark::State& state) {
   state.counters["blocks"] = double(blocks);
 }
 BENCHMARK(BM_ReadLastFrame)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(1.0);
+
+// The tracking raycast of the map of kWarmupFrames + 1 frames, from the poses of the frames after them: the CPU's
+// raycast() (skip_blocks off, no hint, no colour or shading: what the device does) against
+// DeviceVoxelGrid::raycast (its range image, march and read-back in counters).
+void BM_Raycast(benchmark::State& state) {
+  const bool device = state.range(0) == 1;
+  const auto& frames = room_frames();
+  const hf::fusion::VolumeParams params = volume_1cm();
+  hf::fusion::VoxelBlockGrid grid(params);
+  for (int i = 0; i <= kWarmupFrames; ++i)
+    hf::fusion::integrate(grid, frames[size_t(i)].depth, frames[size_t(i)].color, room_camera(),
+                          frames[size_t(i)].T_world_camera);
+  std::unique_ptr<hf::fusion::DeviceVoxelGrid> map;
+  if (device) {
+    map = std::make_unique<hf::fusion::DeviceVoxelGrid>(params);
+    map->load(grid);
+  }
+  hf::fusion::RaycastOptions options;
+  options.skip_blocks = false;
+  options.shade = false;
+  options.color = false;
+  hf::fusion::RaycastResult out;
+  int next = kWarmupFrames + 1;
+  double range_ms = 0, march_ms = 0, read_ms = 0, hits = 0;
+  for (auto _ : state) {
+    const hf::SE3& pose = frames[size_t(next)].T_world_camera;
+    next = next + 1 < kFrames ? next + 1 : kWarmupFrames + 1;
+    if (device) {
+      map->raycast(room_camera(), pose, options, &out);
+      const auto t = map->last_raycast_times();
+      range_ms += t.range_ms, march_ms += t.march_ms, read_ms += t.read_ms;
+    } else {
+      hf::fusion::raycast(grid, room_camera(), pose, options, &out);
+    }
+    hits += out.hit_count;
+  }
+  const double n = double(state.iterations());
+  state.counters["hits"] = hits / n;
+  if (device) {
+    state.counters["range_ms"] = range_ms / n;
+    state.counters["march_ms"] = march_ms / n;
+    state.counters["read_ms"] = read_ms / n;
+  }
+}
+BENCHMARK(BM_Raycast)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 void BM_Pipeline(benchmark::State& state) {
   hf::datasets::SyntheticOptions options;

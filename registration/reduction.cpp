@@ -1,6 +1,7 @@
 #include "registration/reduction.h"
 
 #include <algorithm>
+#include <atomic>
 
 #include "core/error.h"
 #include "registration/cpu_backend.h"
@@ -49,6 +50,11 @@ hf_transform12 to_transform12(const SE3& T) {
   return out;
 }
 
+std::uint64_t new_kernel_buffer_version() {
+  static std::atomic<std::uint64_t> next{1};
+  return next.fetch_add(1, std::memory_order_relaxed);
+}
+
 hf_reg_maps ResidualProblem::kernel_maps() const {
   hf_reg_maps m;
   for (int i = 0; i < HF_REG_MAX_INPUTS; ++i) m.map[i] = static_cast<const float*>(maps[i].data);
@@ -64,7 +70,8 @@ void validate_problem(const ResidualProblem& problem) {
   if (k == nullptr || k->rows == nullptr) throw Error("registration problem: no kernel");
   if (problem.params == nullptr) throw Error(std::string("registration problem: ") + k->name + ": no parameters");
   for (int slot = 0; slot < HF_REG_MAX_INPUTS; ++slot) {
-    if ((k->inputs & HF_REG_IN_BIT(slot)) != 0 && problem.maps[slot].data == nullptr) {
+    if ((k->inputs & HF_REG_IN_BIT(slot)) != 0 && problem.maps[slot].data == nullptr &&
+        problem.maps[slot].buffer == nullptr) {
       throw Error(std::string("registration problem: ") + k->name + ": input map " + reg_input_name(slot) +
                   " is missing");
     }

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/se3.h"
@@ -46,7 +47,9 @@ struct DenseKernel {
   const char* name = "";   // the registry name; the OpenCL kernel is hf_reg_reduce_<name>
   unsigned inputs = 0;     // HF_REG_IN_BIT() of every map slot the pixel function reads
   int max_rows = 1;        // rows per pixel, at most (<= HF_REG_MAX_ROWS)
-  std::size_t params_bytes = 0;  // sizeof the kernel's parameter struct (passed by value to OpenCL)
+  // sizeof the kernel's parameter struct (passed by value to OpenCL). The C++ rows may read a host struct that
+  // begins with it and adds host-only fields (sdf: the grid); a backend copies only these bytes.
+  std::size_t params_bytes = 0;
   // The scalar per-pixel function of the kernel header, for one pixel (tests, references).
   int (*pixel)(int x, int y, const hf_reg_maps* maps, hf_intrinsics K, hf_transform12 T, const void* params,
                hf_reg_row* rows) = nullptr;
@@ -55,10 +58,27 @@ struct DenseKernel {
   // OpenCL C source of the kernel (its header's text) for a method whose kernel is not in the embedded program
   // (one registered at run time); empty for the built-in methods.
   const char* opencl_source = "";
-  // Its parameters point into host memory (sdf's read the TSDF), so only the cpu backend can reduce it; the
-  // OpenCL backend throws hf::Error naming it.
-  bool host_only = false;
 };
+
+// A method slot's input that is not a per-pixel map but a buffer of its own size and lifetime (sdf: the map's
+// block hash and voxel pool in the flat layout of fusion/kernels/block_hash.h), which only a backend running the
+// kernel's pixel function away from host memory reads: the cpu backend's rows read the method's host structure
+// (sdf: the VoxelBlockGrid) and never ask for it, so it is built on demand, and a device backend keeps its
+// uploaded copy while version() holds, across levels and registration calls (unlike ResidualProblem::
+// inputs_version, which changes per level).
+class KernelBuffer {
+ public:
+  virtual ~KernelBuffer() = default;
+  // Changes whenever the contents change, to a value no buffer had before (new_kernel_buffer_version()): a backend
+  // may meet a new buffer at the address of a destroyed one, and must not take it for the old contents.
+  virtual std::uint64_t version() const = 0;
+  // The contents in the kernel's layout, built when first asked after a change; valid until the next change.
+  // Never empty (a kernel reading an empty map gets a buffer it does not index).
+  virtual std::pair<const void*, std::size_t> contents() const = 0;
+};
+
+// A version for a KernelBuffer's new contents, unique in the process (thread-safe).
+std::uint64_t new_kernel_buffer_version();
 
 // One level's inputs for one method: its kernel, the maps it reads, its parameters. The maps and params are owned
 // by the caller (they must outlive reduce()). Frames: see registration/kernels/reg_common.h (v = T_ref_cur v_cur).
@@ -66,6 +86,8 @@ struct ResidualProblem {
   struct Map {
     const void* data = nullptr;
     std::size_t bytes_per_pixel = 0;  // sizeof(hf_float4) or sizeof(float) for the pyramid's maps
+    // Instead of data: a buffer (KernelBuffer above). The kernel's C++ rows see a null map in this slot.
+    const KernelBuffer* buffer = nullptr;
   };
   const DenseKernel* kernel = nullptr;
   hf_intrinsics camera{};  // intrinsics and size of this level (shared by the current and the reference maps)
@@ -84,6 +106,7 @@ struct ResidualProblem {
   hf_reg_maps kernel_maps() const;
   void set_map(int slot, const hf_float4* data) { maps[slot] = {data, sizeof(hf_float4)}; }
   void set_map(int slot, const float* data) { maps[slot] = {data, sizeof(float)}; }
+  void set_buffer(int slot, const KernelBuffer* buffer) { maps[slot] = {nullptr, 0, buffer}; }
 };
 
 // hf_transform12 of an SE3 (float).

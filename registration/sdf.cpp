@@ -1,72 +1,44 @@
 #include "registration/sdf.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <memory>
 
 #include <Eigen/Core>
 
 #include "core/error.h"
+#include "fusion/flat_block_map.h"
 #include "fusion/integrate.h"
 #include "fusion/raycast.h"
 #include "fusion/voxel_block_grid.h"
-#include "registration/cpu_backend.h"
 #include "registration/dense_method.h"
 #include "registration/gauss_newton.h"
+#include "registration/kernels/sdf_kernel.h"
 
 namespace hf {
 namespace {
 
-// What a row needs besides the current vertices: the map (host memory), where the reference camera sits in it,
-// the gates and the robust weight.
+// The kernel's parameters (registration/kernels/sdf_kernel.h, all a device sees: DenseKernel::params_bytes) and,
+// for the cpu rows, the host grid they read through VolumeSampler.
 struct SdfParams {
+  hf_sdf_params k{};
   const fusion::VoxelBlockGrid* grid = nullptr;
-  Eigen::Matrix3f R_world_ref = Eigen::Matrix3f::Identity();
-  Eigen::Vector3f t_world_ref = Eigen::Vector3f::Zero();
-  float inv_voxel_m = 100.0f;
-  float mu_m = 0.04f;
-  float max_abs_sdf = 0.9f;
-  float min_voxel_weight = 0.0f;
-  hf_reg_robust robust{};
+  float min_voxel_weight = 0.0f;  // the sampler's form of k.min_weight_raw
 };
+static_assert(offsetof(SdfParams, k) == 0, "the kernel's parameters lead the host struct");
 
-// The trilinear normalised SDF at p_vox (voxel centres at integers) and its analytic gradient in the same cell
-// (normalised sdf per voxel); false when one of the eight voxels is unobserved or p_vox is not finite.
-bool sdf_and_gradient(fusion::VolumeSampler& sampler, const Eigen::Vector3f& p_vox, float* d, Eigen::Vector3f* g) {
-  if (!(std::fabs(p_vox.x()) < 1e9f && std::fabs(p_vox.y()) < 1e9f && std::fabs(p_vox.z()) < 1e9f)) return false;
-  const Eigen::Vector3f fl = p_vox.array().floor();
-  const int i = int(fl.x()), j = int(fl.y()), k = int(fl.z());
-  const float a = p_vox.x() - fl.x(), b = p_vox.y() - fl.y(), c = p_vox.z() - fl.z();
-  const float* raw = sampler.cell_corners(i, j, k);
-  if (raw == nullptr) return false;
-  float f[8];
-  for (int n = 0; n < 8; ++n) f[n] = raw[n] * (1.0f / HF_SDF_SCALE);
-  // Along x, then y, then z; the gradient is the derivative of the same polynomial.
-  const float x00 = f[0] + a * (f[1] - f[0]), x10 = f[2] + a * (f[3] - f[2]);
-  const float x01 = f[4] + a * (f[5] - f[4]), x11 = f[6] + a * (f[7] - f[6]);
-  const float y0 = x00 + b * (x10 - x00), y1 = x01 + b * (x11 - x01);
-  *d = y0 + c * (y1 - y0);
-  const float dx0 = (f[1] - f[0]) + b * ((f[3] - f[2]) - (f[1] - f[0]));
-  const float dx1 = (f[5] - f[4]) + b * ((f[7] - f[6]) - (f[5] - f[4]));
-  *g = Eigen::Vector3f(dx0 + c * (dx1 - dx0), (x10 - x00) + c * ((x11 - x01) - (x10 - x00)), y1 - y0);
-  return true;
-}
-
-// One pixel's row: r = D(T_world_ref T_ref_cur v_cur) in metres, dr/dv = R_world_ref^T grad D.
-int sdf_pixel(int x, int y, const hf_reg_maps* maps, hf_intrinsics K, hf_transform12 T, const SdfParams& p,
+// One pixel's row over the host grid: the kernel header's steps around the sampler's cached gather.
+int sdf_pixel(int x, int y, const hf_reg_maps* maps, hf_intrinsics K, hf_transform12 T, const hf_sdf_params& p,
               fusion::VolumeSampler& sampler, hf_reg_row* row) {
-  const hf_float4 vc = hf_reg_map4(maps, HF_REG_IN_CUR_VERTICES)[y * K.width + x];
-  if (!hf_is_valid4(vc)) return 0;
-  const hf_float4 v = hf_reg_transform_point(T, vc);
-  const Eigen::Vector3f q = p.R_world_ref * Eigen::Vector3f(v.x, v.y, v.z) + p.t_world_ref;
-  float s = 0.0f;
-  Eigen::Vector3f g;
-  if (!sdf_and_gradient(sampler, q * p.inv_voxel_m - Eigen::Vector3f::Constant(0.5f), &s, &g)) return 0;
-  if (!(std::fabs(s) < p.max_abs_sdf)) return 0;
-  const float r = s * p.mu_m;
-  const Eigen::Vector3f a = p.R_world_ref.transpose() * (g * (p.mu_m * p.inv_voxel_m));
-  if (!a.allFinite()) return 0;
-  hf_reg_set_row(v, hf_make_float4(a.x(), a.y(), a.z(), 0.0f), r, hf_reg_term_weight(p.robust, r), row);
-  return 1;
+  hf_float4 v;
+  int cell[3];
+  float frac[3];
+  if (!hf_sdf_locate(x, y, maps, K, T, p, &v, cell, frac)) return 0;
+  const float* raw = sampler.cell_corners(cell[0], cell[1], cell[2]);
+  if (raw == nullptr) return 0;
+  return hf_sdf_row(raw, frac, v, p, row);
 }
 
 // The cpu backend's loop over rows [y0, y1): one sampler (block cache) per call, the calls run concurrently.
@@ -80,7 +52,7 @@ void sdf_rows(const ResidualProblem& problem, int y0, int y1, double* sums) {
     if (y % step != 0) continue;
     for (int x = 0; x < problem.width(); x += step) {
       hf_reg_row row;
-      if (sdf_pixel(x, y, &maps, problem.camera, problem.T_ref_cur, p, sampler, &row)) hf_reg_accumulate(&row, sums);
+      if (sdf_pixel(x, y, &maps, problem.camera, problem.T_ref_cur, p.k, sampler, &row)) hf_reg_accumulate(&row, sums);
     }
   }
 }
@@ -90,28 +62,75 @@ int sdf_one_pixel(int x, int y, const hf_reg_maps* maps, hf_intrinsics K, hf_tra
   const SdfParams& p = *static_cast<const SdfParams*>(params);
   if (p.grid == nullptr) return 0;
   fusion::VolumeSampler sampler(*p.grid, p.min_voxel_weight, false);
-  return sdf_pixel(x, y, maps, K, T, p, sampler, rows);
+  return sdf_pixel(x, y, maps, K, T, p.k, sampler, rows);
 }
 
 DenseKernel make_sdf_kernel() {
   DenseKernel k;
   k.name = "sdf";
-  k.inputs = HF_REG_IN_BIT(HF_REG_IN_CUR_VERTICES);
+  k.inputs = HF_REG_IN_BIT(HF_REG_IN_CUR_VERTICES) | HF_REG_IN_BIT(HF_SDF_IN_TABLE) | HF_REG_IN_BIT(HF_SDF_IN_POOL);
   k.max_rows = 1;
-  k.params_bytes = sizeof(SdfParams);
+  k.params_bytes = sizeof(hf_sdf_params);
   k.pixel = &sdf_one_pixel;
   k.rows = &sdf_rows;
-  k.host_only = true;
   return k;
 }
 const DenseKernel kKernel = make_sdf_kernel();
 
+// The map in the kernel's flat layout (fusion/flat_block_map.h), built only when a device backend asks for it
+// (KernelBuffer): one copy of every block, once per map version (a set_volume or a pairwise fusion), whatever
+// the number of levels and iterations that read it. The table and the pool are two slots, two views of one copy.
+class FlatMapCache {
+ public:
+  void set(const fusion::VoxelBlockGrid* grid) {
+    grid_ = grid;
+    entries_ = fusion::flat_table_entries(grid->block_count());
+    version_ = new_kernel_buffer_version();
+  }
+  std::uint64_t version() const { return version_; }
+  // The table's size, known before the copy is built (the kernel's parameters need it per level).
+  size_t entries() const { return entries_; }
+  const fusion::FlatBlockMap& flat() const {
+    if (built_ != version_) {
+      flat_ = fusion::flatten(*grid_, entries_);
+      built_ = version_;
+    }
+    return flat_;
+  }
+
+  class Part final : public KernelBuffer {
+   public:
+    Part(const FlatMapCache& cache, bool table) : cache_(cache), table_(table) {}
+    std::uint64_t version() const override { return cache_.version(); }
+    std::pair<const void*, std::size_t> contents() const override {
+      const fusion::FlatBlockMap& f = cache_.flat();
+      if (table_) return {f.table.data(), f.table.size() * sizeof(hf_block_entry)};
+      return {f.pool.data(), f.pool.size() * sizeof(fusion::Voxel)};
+    }
+
+   private:
+    const FlatMapCache& cache_;
+    bool table_;
+  };
+
+ private:
+  const fusion::VoxelBlockGrid* grid_ = nullptr;
+  size_t entries_ = 16;
+  std::uint64_t version_ = 0;
+  mutable std::uint64_t built_ = ~std::uint64_t(0);
+  mutable fusion::FlatBlockMap flat_;
+};
+
 class SdfMethod final : public DenseMethod {
  public:
-  explicit SdfMethod(const SdfOptions& options) : options_(options) {
-    params_.max_abs_sdf = options.max_abs_sdf;
+  explicit SdfMethod(const SdfOptions& options)
+      : options_(options), table_(flat_, true), pool_(flat_, false) {
+    params_.k.max_abs_sdf = options.max_abs_sdf;
     params_.min_voxel_weight = options.min_voxel_weight;
-    params_.robust = robust_params(options.robust_sdf, options.huber_sdf_m, options.t_sigma_sdf_m, options.t_dof_sdf);
+    // VolumeSampler's rule: weight 0 (never observed) is always unobserved.
+    params_.k.min_weight_raw = std::max(1, int(hf_quantise_weight(std::max(0.0f, options.min_voxel_weight))));
+    params_.k.robust =
+        robust_params(options.robust_sdf, options.huber_sdf_m, options.t_sigma_sdf_m, options.t_dof_sdf);
   }
   const DenseKernel& kernel() const override { return kKernel; }
   const void* params() const override { return &params_; }
@@ -119,16 +138,18 @@ class SdfMethod final : public DenseMethod {
     return double(count_valid_pixels(current.vertices, options_.finest_level_step));
   }
   bool aligns_to_volume() const override { return true; }
+  // The map changes between calls (the pipeline integrates a frame): a new version of the device copy each time.
   void set_volume(const fusion::VoxelBlockGrid* grid, const SE3& T_world_ref) override {
     volume_ = grid;
     T_world_ref_ = T_world_ref;
+    if (grid != nullptr) flat_.set(grid);
   }
   bool reads_reference() const override { return volume_ == nullptr; }
 
   int pixel_step() const override { return level_ == 0 ? options_.finest_level_step : 1; }
 
   void begin_level(int level, const FramePyramidLevel&, const FramePyramidLevel& reference,
-                   ResidualProblem&) override {
+                   ResidualProblem& problem) override {
     level_ = level;
     const fusion::VoxelBlockGrid* grid = volume_;
     SE3 T_world_ref = T_world_ref_;
@@ -136,12 +157,21 @@ class SdfMethod final : public DenseMethod {
       fuse_reference(reference);
       grid = own_.get();
       T_world_ref = SE3();
+      flat_.set(grid);
     }
     params_.grid = grid;
-    params_.R_world_ref = T_world_ref.rotation().cast<float>();
-    params_.t_world_ref = T_world_ref.translation().cast<float>();
-    params_.inv_voxel_m = float(1.0 / grid->params().voxel_m);
-    params_.mu_m = float(grid->params().truncation_m());
+    params_.k.T_world_ref = to_transform12(T_world_ref);
+    params_.k.inv_voxel_m = float(1.0 / grid->params().voxel_m);
+    params_.k.mu_m = float(grid->params().truncation_m());
+    params_.k.step = pixel_step();
+    // The flat copy's table (fusion/flat_block_map.h), sized before the copy is built; the look-up bound is the
+    // table itself (a look-up stops at an empty entry, and at least half of them are).
+    const size_t entries = flat_.entries();
+    params_.k.table_mask = std::uint32_t(entries - 1);
+    params_.k.table_shift = 64 - std::countr_zero(entries);
+    params_.k.table_max_probe = int(entries);
+    problem.set_buffer(HF_SDF_IN_TABLE, &table_);
+    problem.set_buffer(HF_SDF_IN_POOL, &pool_);
   }
 
  private:
@@ -163,6 +193,8 @@ class SdfMethod final : public DenseMethod {
 
   SdfOptions options_;
   SdfParams params_;
+  FlatMapCache flat_;
+  FlatMapCache::Part table_, pool_;
   int level_ = 0;
   const fusion::VoxelBlockGrid* volume_ = nullptr;
   SE3 T_world_ref_;
@@ -180,8 +212,6 @@ RegistrationOptions defaults() {
 }
 
 std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend> backend) {
-  // The rows read the map in host memory (DenseKernel::host_only): the cpu backend, whichever was asked for.
-  if (backend != nullptr && backend->name() != "cpu") backend = std::make_unique<CpuReductionBackend>();
   return std::make_unique<GaussNewtonRegistration>(
       "sdf", std::make_unique<SdfMethod>(options.method_as<SdfOptions>()), options, std::move(backend));
 }

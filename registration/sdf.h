@@ -14,8 +14,12 @@
 // tests), the method fuses the reference level it is given into a volume of its own (voxel_m, identity pose) and
 // aligns to that, so it is a drop-in pairwise method too.
 //
-// Backends: the rows read the map in host memory, which has no device copy yet (issue 20), so the method reduces on
-// the cpu backend whatever backend it is given (DenseKernel::host_only; name() says "sdf").
+// Backends: the rows are registration/kernels/sdf_kernel.h on every backend. The cpu rows gather each trilinear cell
+// from the host grid (VolumeSampler's cache); a device backend (OpenCL) reads the map in the flat layout of the
+// device voxel-block hash (fusion/kernels/block_hash.h), copied from the host grid once per map version when the
+// backend first asks (KernelBuffer, registration/reduction.h: one copy of every block per registration call in the
+// pipeline, per pyramid level pairwise). The two agree to the order of the double sums (tests/registration:
+// test_opencl_backend, test_accuracy).
 #pragma once
 
 #include "registration/registration.h"

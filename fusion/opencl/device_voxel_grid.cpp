@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "fusion/kernels/block_hash.h"
 #include "registration/opencl/opencl_context.h"
 
 namespace hf::opencl {
@@ -30,10 +31,7 @@ constexpr std::uint32_t kErrorPool = 1, kErrorProbe = 2, kErrorList = 4;
 constexpr int kFrameConstants = 34;  // HF_F_COUNT
 constexpr size_t kUpdateGroup = 64;  // work-items per group of the 1-D kernels (divides 512)
 
-struct Entry {
-  std::int32_t x, y, z;
-  std::uint32_t value;
-};
+using Entry = hf_block_entry;  // fusion/kernels/block_hash.h
 static_assert(sizeof(Entry) == 16, "hf_block_entry");
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
@@ -48,19 +46,15 @@ void enqueue_1d(cl::CommandQueue& q, const cl::Kernel& kernel, size_t n) {
   q.enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(round_up(n, kUpdateGroup)), cl::NDRange(kUpdateGroup));
 }
 
-// kernel.setArg(0, args[0]), setArg(1, args[1]), ...
+// kernel.setArg(first, args[0]), setArg(first + 1, args[1]), ...
 template <class... Args>
-void set_args(cl::Kernel& kernel, const Args&... args) {
-  cl_uint i = 0;
+void set_args_from(cl::Kernel& kernel, cl_uint first, const Args&... args) {
+  cl_uint i = first;
   (kernel.setArg(i++, args), ...);
 }
-
-// integrate.cl's hf_block_home (BlockHashTable's home entry).
-std::uint32_t block_home(int x, int y, int z, int shift) {
-  const std::uint64_t k = (std::uint64_t(std::uint32_t(x)) * 0x9E3779B97F4A7C15ull) ^
-                          (std::uint64_t(std::uint32_t(y)) * 0xC2B2AE3D27D4EB4Full) ^
-                          (std::uint64_t(std::uint32_t(z)) * 0x165667B19E3779F9ull);
-  return std::uint32_t((k * 0x9E3779B97F4A7C15ull) >> shift);
+template <class... Args>
+void set_args(cl::Kernel& kernel, const Args&... args) {
+  set_args_from(kernel, 0, args...);
 }
 
 }  // namespace
@@ -70,6 +64,11 @@ struct DeviceVoxelGrid::Impl {
   DeviceGridOptions options;
   bool fp64 = false;
   cl::Kernel band_ends, bands, find, create, block_frames, incidence, update, gather;
+  cl::Kernel clear_range, range, march;
+  // The raycast's buffers, per image size (mutable: raycast() is const on the map).
+  cl::Buffer rc_constants, rc_near, rc_far, rc_depth, rc_vertices, rc_normals, rc_hits;
+  size_t rc_pixels = 0, rc_tiles = 0;
+  DeviceVoxelGrid::RaycastTimes rc_times;
   size_t entries = 0;
   int shift = 0;
   cl::Buffer table, stamps, pool, visible, frames, counters, constants;
@@ -165,6 +164,9 @@ DeviceVoxelGrid::DeviceVoxelGrid(const VolumeParams& params, std::shared_ptr<ope
     m.incidence = cl::Kernel(program, "hf_point_to_plane");
     m.update = cl::Kernel(program, "hf_fusion_update");
     m.gather = cl::Kernel(program, "hf_gather_blocks");
+    m.clear_range = cl::Kernel(program, "hf_raycast_clear_range");
+    m.range = cl::Kernel(program, "hf_raycast_range");
+    m.march = cl::Kernel(program, "hf_raycast_march");
     const cl::Context& c = m.ctx->context();
     m.table = cl::Buffer(c, CL_MEM_READ_WRITE, m.entries * sizeof(Entry));
     m.stamps = cl::Buffer(c, CL_MEM_READ_WRITE, m.entries * sizeof(std::uint32_t));
@@ -173,6 +175,8 @@ DeviceVoxelGrid::DeviceVoxelGrid(const VolumeParams& params, std::shared_ptr<ope
     m.frames = cl::Buffer(c, CL_MEM_READ_WRITE, params_.capacity_blocks * 4 * sizeof(float));
     m.counters = cl::Buffer(c, CL_MEM_READ_WRITE, kCounters * sizeof(std::uint32_t));
     m.constants = cl::Buffer(c, CL_MEM_READ_ONLY, kFrameConstants * (m.fp64 ? sizeof(double) : sizeof(float)));
+    m.rc_constants = cl::Buffer(c, CL_MEM_READ_ONLY, kFrameConstants * (m.fp64 ? sizeof(double) : sizeof(float)));
+    m.rc_hits = cl::Buffer(c, CL_MEM_READ_WRITE, sizeof(cl_uint));
     m.ctx->queue().enqueueFillBuffer(m.pool, std::uint32_t(0), 0, pool_bytes);
   } catch (const Error&) {
     throw;
@@ -359,7 +363,7 @@ void DeviceVoxelGrid::load(const VoxelBlockGrid& grid) {
   std::vector<Voxel> pool(blocks.size() * HF_VOXELS_PER_BLOCK);
   for (size_t slot = 0; slot < blocks.size(); ++slot) {
     const BlockCoord& c = blocks[slot].first;
-    std::uint32_t e = block_home(c.x, c.y, c.z, m.shift);
+    std::uint32_t e = hf_block_home(c.x, c.y, c.z, m.shift);
     int probe = 0;
     while (table[e].value != 0 && probe < m.options.max_probe) e = (e + 1) & std::uint32_t(m.entries - 1), ++probe;
     if (probe == m.options.max_probe)
@@ -430,6 +434,130 @@ size_t DeviceVoxelGrid::read_last_frame_into(VoxelBlockGrid& grid) const {
     throw;
   } catch (...) {
     opencl::rethrow_as_hf_error(m.where());
+  }
+}
+
+namespace {
+
+// raycast.cl's hf_raycast_params.
+struct RaycastParams {
+  float R_wc[9];
+  float o_vox[3];
+  float mu_m, step_fraction, min_step_m, voxel_m, refine_tol_m, min_depth_m, max_depth_m;
+  cl_int min_weight_raw;
+  hf_intrinsics K;
+};
+static_assert(sizeof(RaycastParams) == 4 * (9 + 3 + 7 + 1) + sizeof(hf_intrinsics), "hf_raycast_params");
+
+template <class T>
+void ensure_image(Image<T>* img, int w, int h) {
+  if (img->width() != w || img->height() != h) *img = Image<T>(w, h);
+}
+
+}  // namespace
+
+DeviceVoxelGrid::RaycastTimes DeviceVoxelGrid::last_raycast_times() const { return impl_->rc_times; }
+
+void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_camera, const RaycastOptions& options,
+                              RaycastResult* out) const {
+  options.validate();
+  if (camera.width <= 0 || camera.height <= 0 || !(camera.fx > 0.0 && camera.fy > 0.0))
+    throw Error("raycast: expected a camera with positive size and focal lengths, got " + camera.describe());
+  if (!T_world_camera.is_finite()) throw Error("raycast: expected a finite T_world_camera");
+  Impl& m = *impl_;
+  const int W = camera.width, H = camera.height;
+  const int TW = (W + 7) / 8, TH = (H + 7) / 8;
+  const size_t n_pixels = size_t(W) * size_t(H), n_tiles = size_t(TW) * size_t(TH);
+  ensure_image(&out->depth, W, H);
+  ensure_image(&out->vertices, W, H);
+  ensure_image(&out->normals, W, H);
+  ensure_image(&out->color, W, H);
+  std::fill(out->color.data(), out->color.data() + n_pixels, Rgb8{});
+  out->shaded = ColorImage();
+  try {
+    const cl::Context& c = m.ctx->context();
+    cl::CommandQueue& q = m.ctx->queue();
+    if (n_pixels > m.rc_pixels) {
+      m.rc_depth = cl::Buffer(c, CL_MEM_WRITE_ONLY, n_pixels * sizeof(float));
+      m.rc_vertices = cl::Buffer(c, CL_MEM_WRITE_ONLY, n_pixels * sizeof(hf_float4));
+      m.rc_normals = cl::Buffer(c, CL_MEM_WRITE_ONLY, n_pixels * sizeof(hf_float4));
+      m.rc_pixels = n_pixels;
+    }
+    if (n_tiles > m.rc_tiles) {
+      m.rc_near = cl::Buffer(c, CL_MEM_READ_WRITE, n_tiles * sizeof(cl_uint));
+      m.rc_far = cl::Buffer(c, CL_MEM_READ_WRITE, n_tiles * sizeof(cl_uint));
+      m.rc_tiles = n_tiles;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    // The constants in integrate.cl's HF_F_* order (those the raycast reads), in the device's real type.
+    const SE3 T_camera_world = T_world_camera.inverse();
+    const Eigen::Matrix3d R_cw = T_camera_world.rotation();
+    const Eigen::Vector3d t_cw = T_camera_world.translation();
+    std::array<double, kFrameConstants> f{};
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) f[size_t(20 + 3 * i + j)] = R_cw(i, j);
+      f[size_t(29 + i)] = t_cw[i];
+    }
+    f[14] = options.min_depth_m;
+    f[15] = options.max_depth_m;
+    f[16] = camera.fx, f[17] = camera.fy, f[18] = camera.cx, f[19] = camera.cy;
+    f[32] = params_.voxel_m;
+    f[33] = params_.block_m();
+    if (m.fp64) {
+      q.enqueueWriteBuffer(m.rc_constants, CL_TRUE, 0, sizeof(f), f.data());
+    } else {
+      std::array<float, kFrameConstants> f32{};
+      for (size_t i = 0; i < f.size(); ++i) f32[i] = float(f[i]);
+      q.enqueueWriteBuffer(m.rc_constants, CL_TRUE, 0, sizeof(f32), f32.data());
+    }
+    set_args(m.clear_range, m.rc_near, m.rc_far, cl_uint(n_tiles));
+    enqueue_1d(q, m.clear_range, n_tiles);
+    set_args(m.range, m.table, cl_uint(m.entries), m.rc_constants, W, H, TW, TH, m.rc_near, m.rc_far);
+    enqueue_1d(q, m.range, m.entries);
+    q.finish();
+    const auto t1 = std::chrono::steady_clock::now();
+    m.rc_times.range_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+
+    // What every ray shares, as raycast.cpp's RayCaster computes it.
+    RaycastParams P{};
+    const Eigen::Matrix3f R = T_world_camera.rotation().cast<float>();
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) P.R_wc[3 * i + j] = R(i, j);
+    const Eigen::Vector3f o =
+        (T_world_camera.translation() / params_.voxel_m).cast<float>() - Eigen::Vector3f::Constant(0.5f);
+    for (int i = 0; i < 3; ++i) P.o_vox[i] = o[i];
+    P.voxel_m = float(params_.voxel_m);
+    P.mu_m = float(params_.truncation_m());
+    P.step_fraction = float(options.step_fraction);
+    P.min_step_m = float(options.min_step_vox * params_.voxel_m);
+    P.refine_tol_m = float(options.refine_tol_vox * params_.voxel_m);
+    P.min_depth_m = float(options.min_depth_m);
+    P.max_depth_m = float(options.max_depth_m);
+    P.min_weight_raw = std::max(1, int(hf_quantise_weight(std::max(0.0f, options.min_weight))));
+    P.K = camera.kernel_intrinsics();
+    const cl_uint zero = 0;
+    q.enqueueWriteBuffer(m.rc_hits, CL_FALSE, 0, sizeof(zero), &zero);
+    set_args(m.march, m.table, cl_uint(m.entries - 1), m.shift, m.options.max_probe, m.pool, m.rc_near, m.rc_far, TW,
+             m.rc_constants);
+    m.march.setArg(9, sizeof(P), &P);
+    set_args_from(m.march, 10, m.rc_depth, m.rc_vertices, m.rc_normals, m.rc_hits);
+    // 8 x 8 work-groups: a group's rays are one range tile and read neighbouring voxels.
+    q.enqueueNDRangeKernel(m.march, cl::NullRange, cl::NDRange(round_up(size_t(W), 8), round_up(size_t(H), 8)),
+                           cl::NDRange(8, 8));
+    q.finish();
+    const auto t2 = std::chrono::steady_clock::now();
+    m.rc_times.march_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
+    cl_uint hits = 0;
+    q.enqueueReadBuffer(m.rc_depth, CL_FALSE, 0, n_pixels * sizeof(float), out->depth.data());
+    q.enqueueReadBuffer(m.rc_vertices, CL_FALSE, 0, n_pixels * sizeof(hf_float4), out->vertices.data());
+    q.enqueueReadBuffer(m.rc_normals, CL_FALSE, 0, n_pixels * sizeof(hf_float4), out->normals.data());
+    q.enqueueReadBuffer(m.rc_hits, CL_TRUE, 0, sizeof(hits), &hits);
+    m.rc_times.read_ms = ms_since(t2);
+    out->hit_count = int(hits);
+  } catch (const Error&) {
+    throw;
+  } catch (...) {
+    opencl::rethrow_as_hf_error("raycast on " + device_name());
   }
 }
 

@@ -25,7 +25,7 @@
 // nothing; an empty frame changes nothing.
 //
 // Not (yet) on the device: releasing blocks (garbage collection, streaming: the pool only grows until clear()),
-// deintegration, the raycast. Thread-safety: one call at a time per map (the context's queue is shared: other
+// deintegration, the frame pyramid. Thread-safety: one call at a time per map (the context's queue is shared: other
 // users of the context must serialise their own command sequences, as the registration backend does).
 #pragma once
 
@@ -39,6 +39,7 @@
 #include "core/image.h"
 #include "core/se3.h"
 #include "fusion/integrate.h"
+#include "fusion/raycast.h"
 #include "fusion/voxel_block_grid.h"
 
 namespace hf::opencl {
@@ -91,6 +92,20 @@ class DeviceVoxelGrid {
   // when the blocks do not fit the pool or the probe bound.
   void load(const VoxelBlockGrid& grid);
   void clear();
+
+  // The tracking raycast of fusion/raycast.h on the device map (fusion/opencl/raycast.cl: the range image, the
+  // march with cheap steps and missing-block jumps, the refined crossing, the normal; the samples from the shared
+  // kernel headers): depth, vertices and normals in the camera frame into *out (images resized as raycast() does),
+  // colour black, no shading. options.depth_hint, color, shade and skip_blocks are not used. It agrees with
+  // raycast() (skip_blocks off, no hint) except where two sampling patterns of one field differ, at silhouettes and
+  // the fringe of the observed volume (tests/fusion/opencl). Throws hf::Error as raycast() does for bad options, a
+  // bad camera or pose, and for OpenCL failures. last_raycast_ms: the range image and the march, each to its end.
+  void raycast(const PinholeCamera& camera, const SE3& T_world_camera, const RaycastOptions& options,
+               RaycastResult* out) const;
+  struct RaycastTimes {
+    double range_ms = 0.0, march_ms = 0.0, read_ms = 0.0;
+  };
+  RaycastTimes last_raycast_times() const;
 
  private:
   void check_host_grid(const VoxelBlockGrid& grid) const;

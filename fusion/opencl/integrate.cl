@@ -27,6 +27,7 @@
 // with -ffp-contract=off): forbid contraction here too; the host adds -cl-fp32-correctly-rounded-divide-sqrt.
 #pragma OPENCL FP_CONTRACT OFF
 
+#include "fusion/kernels/block_hash.h"  // hf_block_entry, hf_block_home, hf_block_find: VoxelBlockGrid's hash
 #include "fusion/kernels/integrate_kernels.h"
 
 #if HF_FP64
@@ -67,19 +68,6 @@ typedef float hf_real;
 #define HF_F_VOXEL_M 32
 #define HF_F_BLOCK_M 33
 #define HF_F_COUNT 34
-
-// A hash entry: VoxelBlockGrid's (fusion/block_hash_table.h): block coordinates and value = pool slot + 1, 0 empty.
-typedef struct {
-  int x, y, z;
-  uint value;
-} hf_block_entry;
-
-// BlockHashTable::home: the top log2(size) bits of a Fibonacci mix of the three coordinates.
-inline uint hf_block_home(int x, int y, int z, int shift) {
-  ulong k = ((ulong)(uint)x * 0x9E3779B97F4A7C15ul) ^ ((ulong)(uint)y * 0xC2B2AE3D27D4EB4Ful) ^
-            ((ulong)(uint)z * 0x165667B19E3779F9ul);
-  return (uint)((k * 0x9E3779B97F4A7C15ul) >> shift);
-}
 
 // Block keys in the list: (x, y, z) + 2^20 in 21 bits each, as integrate.cpp packs them.
 #define HF_COORD_BIAS 1048576
@@ -203,19 +191,6 @@ __kernel void hf_fusion_bands(__global const hf_real* ends, __global const int* 
     cell[axis] += step[axis];
     t_max[axis] += t_delta[axis];
   }
-}
-
-// The entry holding (x, y, z), or -1 (absent within max_probe entries of its home, or the probe reached an empty
-// entry).
-inline int hf_block_find(__global const hf_block_entry* table, uint mask, int shift, int max_probe, int x, int y,
-                         int z) {
-  uint e = hf_block_home(x, y, z, shift);
-  for (int i = 0; i < max_probe; ++i, e = (e + 1u) & mask) {
-    const hf_block_entry entry = table[e];
-    if (entry.value == 0u) return -1;
-    if (entry.x == x && entry.y == y && entry.z == z) return (int)e;
-  }
-  return -1;
 }
 
 inline void hf_mark_visible(uint e, __global uint* stamps, uint frame_stamp, __global uint* visible,

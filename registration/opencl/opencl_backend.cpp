@@ -69,9 +69,6 @@ std::size_t OpenClReductionBackend::bytes_per_item() const {
 cl::Kernel& OpenClReductionBackend::method_kernel(const DenseKernel& method) {
   auto it = kernels_.find(method.name);
   if (it != kernels_.end()) return it->second;
-  if (method.host_only)
-    throw Error("OpenCL backend: method '" + std::string(method.name) +
-                "' reads host memory (DenseKernel::host_only) and reduces on the cpu backend only");
   const std::string entry = std::string("hf_reg_reduce_") + method.name;
   cl::Kernel kernel;
   if (method.opencl_source != nullptr && method.opencl_source[0] != '\0') {
@@ -112,10 +109,14 @@ cl::Buffer& OpenClReductionBackend::slot_buffer(int slot, const void* data, std:
 
 void OpenClReductionBackend::upload_inputs(const ResidualProblem& p, cl::Kernel& kernel) {
   const std::size_t n = std::size_t(p.width()) * std::size_t(p.height());
+  // Per-pixel maps: all again when the inputs version, the size or a pointer changed.
   bool same = have_inputs_ && inputs_version_ == p.inputs_version && width_ == p.width() && height_ == p.height();
-  for (int i = 0; i < HF_REG_MAX_INPUTS && same; ++i) same = slots_[i].source == p.maps[i].data;
+  for (int i = 0; i < HF_REG_MAX_INPUTS && same; ++i)
+    same = p.maps[i].buffer != nullptr || slots_[i].source == p.maps[i].data;
   if (!same) {
     for (int i = 0; i < HF_REG_MAX_INPUTS; ++i) {
+      if (p.maps[i].buffer != nullptr) continue;
+      slots_[i].buffer_source = nullptr;
       if (p.maps[i].data == nullptr) {
         slots_[i].source = nullptr;
         slots_[i].bytes = 0;
@@ -128,6 +129,22 @@ void OpenClReductionBackend::upload_inputs(const ResidualProblem& p, cl::Kernel&
     width_ = p.width();
     height_ = p.height();
     ++uploads_;
+  }
+  // Kernel buffers: each on its own version, which outlives levels and calls.
+  for (int i = 0; i < HF_REG_MAX_INPUTS; ++i) {
+    const KernelBuffer* b = p.maps[i].buffer;
+    if (b == nullptr) continue;
+    Slot& s = slots_[i];
+    const std::uint64_t version = b->version();
+    if (s.buffer_source != b || s.buffer_version != version || s.source == nullptr) {
+      const auto [data, bytes] = b->contents();
+      if (data == nullptr || bytes == 0) throw Error("OpenCL backend: kernel buffer in slot " +
+                                                     std::string(reg_input_name(i)) + " is empty");
+      slot_buffer(i, data, bytes);
+      s.buffer_source = b;
+      s.buffer_version = version;
+      ++buffer_uploads_;
+    }
   }
   // Arguments belong to the kernel object (one per method): bind the slots every time, which is cheap.
   for (int i = 0; i < HF_REG_MAX_INPUTS; ++i) {
@@ -185,6 +202,7 @@ NormalEquations OpenClReductionBackend::reduce(const ResidualProblem& problem) {
   } catch (...) {
     // A failed enqueue may have left the buffers half-written: upload again next time.
     have_inputs_ = false;
+    for (Slot& slot : slots_) slot.buffer_source = nullptr;
     rethrow_as_hf_error("OpenCL backend");
   }
 }

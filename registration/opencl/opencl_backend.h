@@ -14,7 +14,8 @@
 // normal equations, far tighter in practice); without fp64 the device sums in float (pairwise in the group tree).
 // Buffers: one per input slot (HF_REG_MAX_INPUTS), allocated once at the largest size seen and reused; the input
 // maps are uploaded only when ResidualProblem::inputs_version, a map pointer or the size changes (the driver keeps
-// them across the iterations of one level), so an iteration uploads only its pose and parameters.
+// them across the iterations of one level), so an iteration uploads only its pose and parameters. A slot holding a
+// KernelBuffer (a method's table, reduction.h) is uploaded when that buffer or its version changes.
 // Failures: hf::Error for a malformed problem (validate_problem), for a method without an OpenCL kernel and for any
 // OpenCL error (naming the call and the error code). Thread-safety: one thread at a time per backend object (own
 // command queue); several backends may share the context from different threads.
@@ -59,6 +60,8 @@ class OpenClReductionBackend final : public ReductionBackend {
   bool accumulates_in_double() const { return use_double_; }
   // How many times the input maps were uploaded (one per new inputs_version / pointer set), for tests.
   std::uint64_t uploads() const { return uploads_; }
+  // How many times a KernelBuffer was uploaded (one per new buffer or version), for tests.
+  std::uint64_t buffer_uploads() const { return buffer_uploads_; }
 
  private:
   // One input map slot: the device buffer (capacity in bytes) and what it currently holds.
@@ -67,6 +70,9 @@ class OpenClReductionBackend final : public ReductionBackend {
     std::size_t capacity = 0;
     const void* source = nullptr;
     std::size_t bytes = 0;
+    // A KernelBuffer's slot: the buffer and the version the device copy holds (source: its contents' pointer).
+    const KernelBuffer* buffer_source = nullptr;
+    std::uint64_t buffer_version = 0;
   };
 
   void upload_inputs(const ResidualProblem& problem, cl::Kernel& kernel);
@@ -93,6 +99,7 @@ class OpenClReductionBackend final : public ReductionBackend {
   std::uint64_t inputs_version_ = 0;
   int width_ = 0, height_ = 0;
   std::uint64_t uploads_ = 0;
+  std::uint64_t buffer_uploads_ = 0;
 };
 
 }  // namespace opencl

@@ -111,7 +111,7 @@ TEST(OpenClContext, EmbeddedSourceInlinesTheSharedHeaders) {
   // Every registered per-pixel method's kernel is in the program.
   for (const std::string& name : registration_names()) {
     const test::MethodUnderTest m = test::method_under_test(name);
-    if (m.dense == nullptr || m.dense->method().kernel().host_only) continue;  // host_only: cpu backend only
+    if (m.dense == nullptr) continue;
     EXPECT_NE(src.find("HF_REG_OPENCL_KERNEL(" + name + ","), std::string_view::npos) << name;
   }
   EXPECT_NE(src.find("#line 1 \"registration/kernels/reg_common.h\""), std::string_view::npos);
@@ -203,7 +203,6 @@ TEST_P(BackendsAgree, OnTheNormalEquationsAndTheSolvedStep) {
     test::MethodUnderTest method;
     ResidualProblem p = make_problem(pair, level, name, robust, T0, method);
     if (method.dense == nullptr) GTEST_SKIP() << name << " is not a per-pixel method";
-    if (p.kernel->host_only) GTEST_SKIP() << name << " reads host memory: it reduces on the cpu backend only";
     p.inputs_version = std::uint64_t(level + 1);
     const NormalEquations a = cpu.reduce(p);
     const NormalEquations b = cl_backend.reduce(p);
@@ -263,6 +262,30 @@ TEST(OpenClBackend, ReusesUploadedMapsWhileTheInputsVersionHolds) {
   EXPECT_EQ(backend.uploads(), 3u);
   CpuReductionBackend cpu;
   EXPECT_EQ(level0.count, cpu.reduce(p).count);
+}
+
+// A method's KernelBuffer (sdf: the map's flat hash and pool) is uploaded once per buffer version, not per inputs
+// version: the next iteration or a re-bound level with the same map reads the device copy it has.
+TEST(OpenClBackend, UploadsAKernelBufferOncePerVersion) {
+  HF_SKIP_WITHOUT_OPENCL();
+  const FramePair& pair = room_pair();
+  test::MethodUnderTest method;
+  ResidualProblem p = make_problem(pair, 1, "sdf", RobustKernel::huber, pair.T_ref_cur_true, method);
+  ASSERT_NE(p.maps[HF_REG_IN_METHOD0].buffer, nullptr);
+  opencl::OpenClReductionBackend backend;
+  CpuReductionBackend cpu;
+  const NormalEquations first = backend.reduce(p);
+  EXPECT_EQ(backend.buffer_uploads(), 2u);  // the table and the pool
+  p.inputs_version += 1;                    // the per-pixel maps again, the map's copy kept
+  const NormalEquations again = backend.reduce(p);
+  EXPECT_EQ(backend.uploads(), 2u);
+  EXPECT_EQ(backend.buffer_uploads(), 2u);
+  EXPECT_EQ(again.to_sums(), first.to_sums());
+  EXPECT_EQ(first.count, cpu.reduce(p).count);
+  // The method fuses its own map again for the next level problem: a new version, uploaded again.
+  p = make_problem(pair, 1, "sdf", RobustKernel::huber, pair.T_ref_cur_true, method);
+  backend.reduce(p);
+  EXPECT_EQ(backend.buffer_uploads(), 4u);
 }
 
 TEST(OpenClBackend, MapsAMethodDoesNotReadMayBeNull) {

@@ -3,10 +3,15 @@
 // cases are tested with every other method by the registry's tests: test_accuracy.cpp, test_hard_cases.cpp.)
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include "datasets/synthetic_sequence.h"
+#include "fusion/flat_block_map.h"
 #include "fusion/integrate.h"
 #include "fusion/voxel_block_grid.h"
 #include "reg_test_util.h"
+#include "registration/gauss_newton.h"
+#include "registration/kernels/sdf_kernel.h"
 
 namespace hf {
 namespace {
@@ -85,6 +90,50 @@ TEST(SdfRegistration, EmptyMapAndNoMapGiveAStatus) {
   r = reg->align(m.current, FramePyramid{}, guess);
   test::expect_finite(r);
   EXPECT_EQ(r.status, RegistrationStatus::no_data) << r.message;
+}
+
+// The two gathers of one cell, the host grid's (VolumeSampler, the cpu rows) and the flat hash a device reads
+// (hf_sdf_pixel over the method's KernelBuffers, what the OpenCL kernel runs), give the same rows bit for bit on
+// every pixel, with and without a weight gate: the arithmetic around them is one header's
+// (registration/kernels/sdf_kernel.h), so the C++ and OpenCL backends can differ only in the order of their sums.
+TEST(SdfRegistration, TheFlatMapGivesTheHostGridsRows) {
+  MapCase m = make_map_case(true);
+  long ungated_rows = 0;
+  for (const float min_weight : {0.0f, 3.0f}) {
+    RegistrationOptions options = default_registration_options("sdf");
+    options.set("min_voxel_weight", double(min_weight));
+    options.set("finest_level_step", 1);
+    test::MethodUnderTest method = test::method_under_test("sdf", options, make_backend("cpu"));
+    method.registration->set_volume(&m.grid, m.T_world_ref);
+    // 5 mm / ~0.3 degrees off the true pose, so rows land in every part of the band.
+    const SE3 T = SE3::exp((Vector6d() << 0.003, -0.004, 0.005, 0.005, 0.002, -0.003).finished()) *
+                  (m.T_world_ref.inverse() * m.T_world_cur);
+    const ResidualProblem p = method.dense->level_problem(m.current, FramePyramid{}, 0, T);
+    ASSERT_NE(p.maps[HF_SDF_IN_TABLE].buffer, nullptr);
+    hf_reg_maps flat_maps = p.kernel_maps();
+    flat_maps.map[HF_SDF_IN_TABLE] = static_cast<const float*>(p.maps[HF_SDF_IN_TABLE].buffer->contents().first);
+    flat_maps.map[HF_SDF_IN_POOL] = static_cast<const float*>(p.maps[HF_SDF_IN_POOL].buffer->contents().first);
+    const hf_reg_maps host_maps = p.kernel_maps();
+    const hf_sdf_params params = *static_cast<const hf_sdf_params*>(p.params);
+    long rows = 0, differ = 0;
+    for (int y = 0; y < p.height(); ++y) {
+      for (int x = 0; x < p.width(); ++x) {
+        hf_reg_row a{}, b{};
+        const int na = p.kernel->pixel(x, y, &host_maps, p.camera, p.T_ref_cur, p.params, &a);
+        const int nb = hf_sdf_pixel(x, y, &flat_maps, p.camera, p.T_ref_cur, params, &b);
+        rows += na;
+        differ += na != nb || (na == 1 && std::memcmp(&a, &b, sizeof a) != 0);
+      }
+    }
+    EXPECT_GT(rows, 20000) << "min weight " << min_weight;
+    EXPECT_EQ(differ, 0) << "min weight " << min_weight << ": of " << rows << " rows";
+    // The weight gate removes rows (the edges of the map saw fewer than 3 frames), on both paths alike.
+    if (min_weight == 0.0f) {
+      ungated_rows = rows;
+    } else {
+      EXPECT_LT(rows, ungated_rows);
+    }
+  }
 }
 
 }  // namespace
