@@ -16,6 +16,7 @@ namespace {
 
 struct BenchCliOptions {
   std::vector<std::string> inputs;
+  std::vector<std::string> merge;  // --merge DIR...: combine earlier results instead of running
   std::string registration = "all";
   std::string peers = "all";
   std::string loop_closure = "on";
@@ -46,6 +47,12 @@ std::string number(double v) {
 }
 
 void run_bench_command(const BenchCliOptions& c) {
+  if (!c.merge.empty()) {
+    const bench::BenchReport report = bench::merge_bench(c.merge, c.out, bench::build_source_dir(), c.command_line);
+    std::cout << "outputs:\n";
+    for (const std::string& f : report.files) std::cout << "  " << std::filesystem::absolute(f).string() << "\n";
+    return;
+  }
   bench::BenchOptions o;
   o.inputs = c.inputs;
   o.registrations = bench::resolve_registrations(c.registration);
@@ -86,15 +93,19 @@ void run_bench_command(const BenchCliOptions& c) {
 void add_bench_command(CLI::App& app) {
   auto opts = std::make_shared<BenchCliOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "bench", "Run every registration (and PCL peers) on every input; write results.{md,json,csv} and plots");
+      "bench", "Run every registration (and the PCL / Open3D peers) on every input; write results.{md,json,csv} and plots");
   cmd->add_option("--input", opts->inputs,
                   "synthetic:PRESET, synthetic:all, a TUM / 7-Scenes folder, or a folder containing such datasets "
-                  "(searched recursively); repeatable")
-      ->required()
+                  "(searched recursively); repeatable; required unless --merge")
+      ->expected(1, -1);
+  cmd->add_option("--merge", opts->merge,
+                  "instead of running: combine the results.json of these earlier --out folders into --out (a later "
+                  "folder's row replaces an earlier one of the same method and input)")
       ->expected(1, -1);
   cmd->add_option("--registration", opts->registration, "all, or a comma-separated list of registration methods")
       ->capture_default_str();
-  cmd->add_option("--peers", opts->peers, "PCL peers: all, none, or a comma-separated list of gicp, ndt")
+  cmd->add_option("--peers", opts->peers, "peers: all, none, or a comma-separated list of gicp, ndt (PCL), o3d-icp, o3d-colored-icp, o3d-rgbd "
+                  "(Open3D, where built)")
       ->capture_default_str();
   cmd->add_option("--loop-closure", opts->loop_closure,
                   "loop-closure modes each registration runs in: all, or a list of off, on, global (run --global)")
@@ -123,6 +134,15 @@ void add_bench_command(CLI::App& app) {
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
   cmd->callback([opts] {
+    if (opts->inputs.empty() && opts->merge.empty()) throw Error("bench: --input is required (or --merge DIR... to combine earlier results)");
+    if (!opts->merge.empty()) {
+      if (!opts->inputs.empty()) throw Error("bench: --merge runs nothing: give --input or --merge, not both");
+      std::string line = "hashfusion bench --merge";
+      for (const std::string& d : opts->merge) line += " " + quote_arg(d);
+      opts->command_line = line + " --out " + quote_arg(opts->out);
+      run_bench_command(*opts);
+      return;
+    }
     // The command line as typed, for the report (CLI11 keeps no copy of argv).
     std::string line = "hashfusion bench";
     for (const std::string& i : opts->inputs) line += " --input " + quote_arg(i);

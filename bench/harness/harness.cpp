@@ -1,12 +1,16 @@
 // run_bench: the part of the harness that drives slam::Pipeline.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 
+#include "bench/harness/frame_rpe.h"
 #include "bench/harness/harness.h"
 #include "bench/harness/inputs.h"
 #include "bench/harness/speed_plot.h"
@@ -43,6 +47,15 @@ std::string describe(const RunRow& r) {
                 r.ate_rmse_m ? (std::to_string(*r.ate_rmse_m) + " m").c_str() : "n/a", r.frames_lost, r.frames,
                 r.ms.total, r.fps, r.interrupted ? ", interrupted" : "");
   return buffer;
+}
+
+// The per-frame-pair RPE (frame_rpe.h) of a run that has an ATE (the same ground truth the ATE used).
+void set_frame_rpe(RunRow& row, const Trajectory& gt, const Trajectory& estimate) {
+  if (!row.ate_rmse_m || gt.empty()) return;
+  const FrameRpe rpe = evaluate_rpe_per_frame(gt, estimate);
+  if (rpe.empty()) return;
+  row.rpe_frame_trans_m = rpe.trans_m.rmse;
+  row.rpe_frame_rot_deg = rpe.rot_deg.rmse;
 }
 
 // The input's frames as a FrameSource; synthetic inputs read their rendered TUM folder.
@@ -97,6 +110,7 @@ RunRow run_method(const BenchInput& input, const std::string& folder, const std:
     row.ms = {s.mean_ms.read, s.mean_ms.preprocess, s.mean_ms.track, s.mean_ms.integrate, s.mean_ms.raycast,
               s.mean_ms.total()};
     estimate = run.estimate();
+    set_frame_rpe(row, source->ground_truth(), estimate);
   } catch (const std::exception& e) {  // hf::Error, fusion::CapacityError, std::bad_alloc: a failed row
     row.failed = true;
     row.error = one_line(e.what());
@@ -143,6 +157,7 @@ RunRow run_peer_row(const BenchInput& input, const std::string& folder, const st
         row.ate_rmse_m = m.ate_m.rmse;
         if (m.rpe_trans_m_per_s) row.rpe_trans_m_per_s = m.rpe_trans_m_per_s->rmse;
         if (m.rpe_rot_deg_per_s) row.rpe_rot_deg_per_s = m.rpe_rot_deg_per_s->rmse;
+        set_frame_rpe(row, gt, estimate);
       } catch (const Error&) {
         // No associated pairs (e.g. time stamps beyond the ground truth): no ATE, as for a pipeline run.
       }
@@ -183,6 +198,50 @@ std::string settings_line(const BenchOptions& o) {
                 o.max_frames > 0 ? int(std::min<long>(o.max_frames, o.synthetic_frames)) : o.synthetic_frames,
                 double(o.peer.voxel_m), double(o.peer.ndt_resolution_m), o.peer.pixel_stride);
   return buffer;
+}
+
+// The speed-vs-error plots (overall and per input) of `results` into `out`; returns their file names.
+std::vector<std::string> write_plots(const std::string& out, const BenchResults& results) {
+  std::vector<std::string> plot_files;
+  {
+    std::vector<SpeedPoint> points;
+    SpeedPlotOptions plot;
+    plot.title = "speed against error: all inputs (" + std::to_string(results.inputs.size()) + ")";
+    plot.subtitle = "mean ms per frame over finished runs vs mean ATE RMSE over the inputs each method tracked";
+    for (const MethodSummary& s : summarize_methods(results.runs, results.methods)) {
+      if (s.mean_ate_m && s.mean_ms_per_frame) {
+        points.push_back({s.name + " (" + std::to_string(s.inputs_comparable) + "/" + std::to_string(s.inputs_run) +
+                              ")",
+                          *s.mean_ms_per_frame, *s.mean_ate_m, s.peer});
+      } else {
+        plot.not_plotted.push_back(s.name);
+      }
+    }
+    write_speed_plot(out + "/speed_vs_error.png", points, plot);
+    plot_files.push_back("speed_vs_error.png");
+  }
+  for (const std::string& label : results.inputs) {
+    std::vector<SpeedPoint> points;
+    SpeedPlotOptions plot;
+    plot.title = "speed against error: " + label;
+    plot.subtitle = "ms per frame (all stages) vs ATE RMSE";
+    bool any = false;
+    for (const RunRow& r : results.runs) {
+      if (r.input != label) continue;
+      any = true;
+      if (r.comparable()) {
+        points.push_back({r.display_name(), r.ms.total, *r.ate_rmse_m, r.peer});
+      } else {
+        plot.not_plotted.push_back(r.display_name());
+      }
+    }
+    if (!any) continue;
+    const std::string name = "speed_vs_error_" + file_safe(label) + ".png";
+    write_speed_plot(out + "/" + name, points, plot);
+    plot_files.push_back(name);
+  }
+
+  return plot_files;
 }
 
 }  // namespace
@@ -280,49 +339,63 @@ BenchReport run_bench(const BenchOptions& o) {
   }
   fs::remove(cache_root, ec);  // only when empty
 
-  // Plots: overall and per input.
-  std::vector<std::string> plot_files;
-  {
-    std::vector<SpeedPoint> points;
-    SpeedPlotOptions plot;
-    plot.title = "speed against error: all inputs (" + std::to_string(results.inputs.size()) + ")";
-    plot.subtitle = "mean ms per frame over finished runs vs mean ATE RMSE over the inputs each method tracked";
-    for (const MethodSummary& s : summarize_methods(results.runs, results.methods)) {
-      if (s.mean_ate_m && s.mean_ms_per_frame) {
-        points.push_back({s.name + " (" + std::to_string(s.inputs_comparable) + "/" + std::to_string(s.inputs_run) +
-                              ")",
-                          *s.mean_ms_per_frame, *s.mean_ate_m, s.peer});
-      } else {
-        plot.not_plotted.push_back(s.name);
-      }
-    }
-    write_speed_plot(o.out + "/speed_vs_error.png", points, plot);
-    plot_files.push_back("speed_vs_error.png");
-  }
-  for (const std::string& label : results.inputs) {
-    std::vector<SpeedPoint> points;
-    SpeedPlotOptions plot;
-    plot.title = "speed against error: " + label;
-    plot.subtitle = "ms per frame (all stages) vs ATE RMSE";
-    bool any = false;
-    for (const RunRow& r : results.runs) {
-      if (r.input != label) continue;
-      any = true;
-      if (r.comparable()) {
-        points.push_back({r.display_name(), r.ms.total, *r.ate_rmse_m, r.peer});
-      } else {
-        plot.not_plotted.push_back(r.display_name());
-      }
-    }
-    if (!any) continue;
-    const std::string name = "speed_vs_error_" + file_safe(label) + ".png";
-    write_speed_plot(o.out + "/" + name, points, plot);
-    plot_files.push_back(name);
-  }
-
+  const std::vector<std::string> plot_files = write_plots(o.out, results);
   report.files = write_results(o.out, results, plot_files);
   for (const std::string& f : plot_files) report.files.push_back(o.out + "/" + f);
   report.files.insert(report.files.end(), trajectory_files.begin(), trajectory_files.end());
+  return report;
+}
+
+BenchReport merge_bench(const std::vector<std::string>& dirs, const std::string& out, const std::string& source_dir,
+                        const std::string& command_line) {
+  if (dirs.empty()) throw Error("bench --merge: no result folder given");
+  BenchReport report;
+  BenchResults& merged = report.results;
+  merged.machine = current_machine(source_dir, command_line);
+  auto add_unique = [](std::vector<std::string>& list, const std::string& item) {
+    if (std::find(list.begin(), list.end(), item) == list.end()) list.push_back(item);
+  };
+  std::vector<std::string> settings;
+  for (const std::string& dir : dirs) {
+    const std::string file = dir + "/results.json";
+    std::ifstream in(file);
+    if (!in) throw Error(file + ": cannot open (bench --merge reads the results.json of earlier runs)");
+    nlohmann::json j;
+    try {
+      in >> j;
+    } catch (const nlohmann::json::exception& e) {
+      throw ParseError(file, 0, std::string("expected JSON: ") + e.what());
+    }
+    const BenchResults part = results_from_json(j, file);
+    merged.notes.push_back("rows of " + file + ": commit " + part.machine.commit + ", " + part.machine.date_utc +
+                           ", `" + part.machine.command_line + "`");
+    add_unique(settings, part.settings);
+    for (const std::string& n : part.notes) add_unique(merged.notes, n);
+    for (const std::string& m : part.methods) add_unique(merged.methods, m);
+    for (const std::string& i : part.inputs) add_unique(merged.inputs, i);
+    for (const RunRow& row : part.runs) {
+      // A later folder's row replaces an earlier one of the same method on the same input.
+      auto same = std::find_if(merged.runs.begin(), merged.runs.end(), [&](const RunRow& r) {
+        return r.display_name() == row.display_name() && r.input == row.input;
+      });
+      if (same != merged.runs.end()) {
+        *same = row;
+      } else {
+        merged.runs.push_back(row);
+      }
+    }
+  }
+  // Table order: hashfusion methods first, then peers (as run_bench writes them).
+  std::stable_partition(merged.methods.begin(), merged.methods.end(), [](const std::string& m) {
+    return !(m.size() > 7 && m.compare(m.size() - 7, 7, " (peer)") == 0);
+  });
+  for (size_t k = 0; k < settings.size(); ++k) merged.settings += (k ? "; " : "") + settings[k];
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec || !fs::is_directory(out)) throw Error(out + ": cannot create the output folder");
+  const std::vector<std::string> plot_files = write_plots(out, merged);
+  report.files = write_results(out, merged, plot_files);
+  for (const std::string& f : plot_files) report.files.push_back(out + "/" + f);
   return report;
 }
 

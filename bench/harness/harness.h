@@ -75,4 +75,13 @@ struct BenchReport {
 // output folder that cannot be created/written; individual runs never make it throw.
 BenchReport run_bench(const BenchOptions& options);
 
+// `hashfusion bench --merge DIR... --out OUT`: the rows of earlier runs' DIR/results.json in one table, without
+// running anything (e.g. a table's peers or one method re-run later at another commit). A later folder's row
+// replaces an earlier one of the same method on the same input; methods and inputs keep their first-seen order
+// (hashfusion methods before peers); the notes name each folder's commit, date and command. Writes results.* and
+// the plots into `out` (no trajectories). Throws hf::Error for a missing folder or file, hf::ParseError for a
+// file that is not a bench results.json.
+BenchReport merge_bench(const std::vector<std::string>& dirs, const std::string& out, const std::string& source_dir,
+                        const std::string& command_line);
+
 }  // namespace hf::bench

@@ -1,5 +1,6 @@
 #include "bench/harness/peers.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <exception>
@@ -12,6 +13,9 @@
 #ifdef HF_BENCH_HAVE_PCL
 #include "bench/pcl_reference.h"
 #endif
+#ifdef HF_BENCH_HAVE_OPEN3D
+#include "bench/open3d_reference.h"
+#endif
 
 namespace hf::bench {
 namespace {
@@ -23,11 +27,14 @@ double ms_since(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 std::vector<std::string> peer_names() {
+  std::vector<std::string> names;
 #ifdef HF_BENCH_HAVE_PCL
-  return {"gicp", "ndt"};
-#else
-  return {};
+  names.insert(names.end(), {"gicp", "ndt"});
 #endif
+#ifdef HF_BENCH_HAVE_OPEN3D
+  for (const std::string& m : open3d_methods()) names.push_back(m);
+#endif
+  return names;
 }
 
 void PeerOptions::validate() const {
@@ -74,13 +81,22 @@ std::vector<Eigen::Vector3f> backproject_depth(const DepthImage& depth, const Pi
 PeerRun run_peer(FrameSource& source, const std::string& method, const PeerOptions& options, long max_frames,
                  const std::atomic<bool>* stop, const std::string& progress_label) {
   options.validate();
-  if (method != "gicp" && method != "ndt") throw Error("unknown peer '" + method + "' (known: gicp, ndt)");
-#ifndef HF_BENCH_HAVE_PCL
+  const bool open3d = method.rfind("o3d-", 0) == 0;
+  if (method != "gicp" && method != "ndt" && method != "o3d-icp" && method != "o3d-colored-icp" &&
+      method != "o3d-rgbd") {
+    throw Error("unknown peer '" + method + "' (known: gicp, ndt, o3d-icp, o3d-colored-icp, o3d-rgbd)");
+  }
+  const std::vector<std::string> built = peer_names();
+  if (std::find(built.begin(), built.end(), method) == built.end()) {
+    throw Error("peer '" + method + "' needs " + (open3d ? "Open3D" : "PCL") +
+                ", which this build of hashfusion does not have");
+  }
+#if !defined(HF_BENCH_HAVE_PCL) && !defined(HF_BENCH_HAVE_OPEN3D)
   (void)source;
   (void)max_frames;
   (void)stop;
   (void)progress_label;
-  throw Error("peer '" + method + "' needs PCL, which this build of hashfusion does not have");
+  return {};
 #else
   const PinholeCamera& camera = source.camera();
   const long total = max_frames > 0 ? std::min<long>(max_frames, long(source.size())) : long(source.size());
@@ -89,6 +105,8 @@ PeerRun run_peer(FrameSource& source, const std::string& method, const PeerOptio
 
   PeerRun run;
   std::vector<Eigen::Vector3f> target;  // the last good frame's cloud (camera frame)
+  DepthImage target_depth;              // and its images (Open3D's peers build their own clouds from them)
+  ColorImage target_color;
   std::optional<SE3> last_good;
   double last_good_time_s = 0.0;
   SE3 velocity;          // T_prev_cur of the last accepted consecutive pair
@@ -124,6 +142,8 @@ PeerRun run_peer(FrameSource& source, const std::string& method, const PeerOptio
         last_good = f.T_world_camera;
         last_good_time_s = f.timestamp_s;
         target = std::move(cloud);
+        target_depth = std::move(r.frame.depth);
+        target_color = std::move(r.frame.color);
       } else {
         f.message = "too few depth points (" + std::to_string(cloud.size()) + ") to start";
       }
@@ -135,23 +155,40 @@ PeerRun run_peer(FrameSource& source, const std::string& method, const PeerOptio
       const bool after_gap = !run.frames.empty() && !run.frames.back().pose_valid;
       const SE3 guess = options.constant_velocity && have_velocity && !after_gap ? velocity : SE3();
       const auto t_track = std::chrono::steady_clock::now();
-      std::vector<Eigen::Vector3f> moved = cloud;
-      const Eigen::Matrix3f R = guess.rotation().cast<float>();
-      const Eigen::Vector3f t = guess.translation().cast<float>();
-      for (Eigen::Vector3f& p : moved) p = R * p + t;
       std::optional<SE3> T_prev_cur;
+      const std::string library = open3d ? "Open3D" : "PCL";
       try {
-        const PclAlignResult res = pcl_align(method, moved, target, options.voxel_m, options.ndt_resolution_m);
-        const SE3 T = SE3::from_matrix(res.T_target_source) * guess;
-        if (!res.converged) {
-          f.message = "PCL " + method + " did not converge";
+        bool converged = false;
+        SE3 T;
+        if (open3d) {
+#ifdef HF_BENCH_HAVE_OPEN3D
+          const Open3dOptions o3{.voxel_m = options.voxel_m, .pixel_stride = options.pixel_stride};
+          const Open3dAlignResult res = open3d_align(method, r.frame.depth, r.frame.color, target_depth,
+                                                     target_color, camera, guess.matrix(), o3);
+          converged = res.converged;
+          T = SE3::from_matrix(res.T_target_source);
+#endif
+        } else {
+#ifdef HF_BENCH_HAVE_PCL
+          // PCL starts at the identity: the source goes in moved by the guess.
+          std::vector<Eigen::Vector3f> moved = cloud;
+          const Eigen::Matrix3f R = guess.rotation().cast<float>();
+          const Eigen::Vector3f t = guess.translation().cast<float>();
+          for (Eigen::Vector3f& p : moved) p = R * p + t;
+          const PclAlignResult res = pcl_align(method, moved, target, options.voxel_m, options.ndt_resolution_m);
+          converged = res.converged;
+          T = SE3::from_matrix(res.T_target_source) * guess;
+#endif
+        }
+        if (!converged) {
+          f.message = library + " " + method + " did not converge";
         } else if (!T.is_finite()) {
-          f.message = "PCL " + method + " returned a non-finite pose";
+          f.message = library + " " + method + " returned a non-finite pose";
         } else {
           T_prev_cur = T;
         }
       } catch (const std::exception& e) {
-        f.message = "PCL " + method + " threw: " + e.what();
+        f.message = library + " " + method + " threw: " + e.what();
       }
       f.ms_track = ms_since(t_track);
       if (T_prev_cur) {
@@ -171,6 +208,8 @@ PeerRun run_peer(FrameSource& source, const std::string& method, const PeerOptio
         last_good = f.T_world_camera;
         last_good_time_s = f.timestamp_s;
         target = std::move(cloud);
+        target_depth = std::move(r.frame.depth);
+        target_color = std::move(r.frame.color);
       } else {
         f.T_world_camera = *last_good;
         have_velocity = false;

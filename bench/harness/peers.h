@@ -1,15 +1,18 @@
-// PCL's GICP and NDT as peer rows of the benchmark: frame-to-frame odometry through PCL's API
-// (bench/pcl_reference.h), judged by the same ATE/RPE as hashfusion's runs.
+// PCL's GICP and NDT (bench/pcl_reference.h) and, where Open3D is installed, Open3D's point-to-plane ICP, coloured
+// ICP and hybrid RGB-D odometry (bench/open3d_reference.h) as peer rows of the benchmark: frame-to-frame odometry
+// through their APIs, judged by the same ATE/RPE as hashfusion's runs.
 //
 // Per frame: read it, back-project every `pixel_stride`-th pixel of the depth with the source's camera
-// (preprocess), align it to the last good frame's cloud starting from the constant-velocity guess (identity right
+// (preprocess; Open3D's peers build their own clouds or pyramids from the frame's images inside track), align it to
+// the last good frame starting from the constant-velocity guess (identity right
 // after a lost frame or with constant_velocity off), and chain T_world_cur = T_world_prev * T_prev_cur (track).
-// A frame is LOST (pose_valid false, not used as the next target) when PCL does not converge, throws, gets fewer
+// A frame is LOST (pose_valid false, not used as the next target) when the library does not converge (Open3D ICP:
+// no correspondence; its odometry: its failure flag), throws, gets fewer
 // than `min_points` points, or implies a motion faster than the speed limits since the last good frame, the same
 // policy as slam::Pipeline. The first frame is placed at its ground-truth pose when it has one, else at the identity.
 // There is no map: integrate and raycast do not exist for peers.
 //
-// Thread-safety: run_peer uses one thread (PCL's GICP/NDT are single-threaded here); one call per source.
+// Thread-safety: one call per source (PCL's GICP/NDT are single-threaded here; Open3D may use OpenMP inside).
 #pragma once
 
 #include <Eigen/Core>
@@ -25,7 +28,8 @@
 
 namespace hf::bench {
 
-// The peers built in: {"gicp", "ndt"}, or empty when the harness was built without PCL.
+// The peers built in: "gicp", "ndt" with PCL, "o3d-icp", "o3d-colored-icp", "o3d-rgbd" with Open3D; empty
+// without either.
 std::vector<std::string> peer_names();
 
 struct PeerOptions {
@@ -60,9 +64,9 @@ struct PeerRun {
 // Camera-frame points of the valid depth pixels (every stride-th pixel in x and y).
 std::vector<Eigen::Vector3f> backproject_depth(const DepthImage& depth, const PinholeCamera& camera, int stride);
 
-// Runs peer `method` ("gicp" or "ndt") over `source`: at most max_frames frames read (0 = all), stopping early when
+// Runs peer `method` (one of peer_names()) over `source`: at most max_frames frames read (0 = all), stopping early when
 // *stop becomes true, with a progress bar when progress_label is non-empty. Throws hf::Error for an unknown method,
-// bad options, or a harness built without PCL.
+// bad options, or a peer whose library (PCL, Open3D) this build lacks.
 PeerRun run_peer(FrameSource& source, const std::string& method, const PeerOptions& options, long max_frames = 0,
                  const std::atomic<bool>* stop = nullptr, const std::string& progress_label = "");
 

@@ -81,7 +81,8 @@ std::vector<std::pair<std::string, InputGroup>> group_by_input(const std::vector
 const char* const kCsvColumns[] = {
     "method", "peer", "input", "source", "status", "error", "frames", "frames_bad", "frames_lost", "ate_rmse_m",
     "rpe_trans_m_per_s", "rpe_rot_deg_per_s", "fps", "ms_read", "ms_preprocess", "ms_track", "ms_integrate",
-    "ms_raycast", "ms_total", "wall_s", "coverage", "lost_spells", "longest_lost_spell", "worst_frame_ms"};
+    "ms_raycast", "ms_total", "wall_s", "coverage", "lost_spells", "longest_lost_spell", "worst_frame_ms",
+    "rpe_frame_trans_m", "rpe_frame_rot_deg"};
 constexpr size_t kCsvColumnCount = sizeof kCsvColumns / sizeof kCsvColumns[0];
 
 std::string csv_field(const std::string& s) {
@@ -140,7 +141,21 @@ MachineInfo current_machine(const std::string& source_dir, const std::string& co
 }
 
 std::optional<double> run_error(const RunRow& run, ErrorMetric metric) {
-  return metric == ErrorMetric::ate_rmse ? run.ate_rmse_m : run.rpe_trans_m_per_s;
+  switch (metric) {
+    case ErrorMetric::ate_rmse: return run.ate_rmse_m;
+    case ErrorMetric::rpe_translation: return run.rpe_trans_m_per_s;
+    case ErrorMetric::rpe_frame_translation: return run.rpe_frame_trans_m;
+  }
+  return std::nullopt;
+}
+
+std::string metric_name(ErrorMetric metric) {
+  switch (metric) {
+    case ErrorMetric::ate_rmse: return "ATE RMSE";
+    case ErrorMetric::rpe_translation: return "translational RPE (1 s)";
+    case ErrorMetric::rpe_frame_translation: return "translational RPE (1 frame)";
+  }
+  return "?";
 }
 
 bool comparable_by(const RunRow& run, ErrorMetric metric) {
@@ -160,7 +175,7 @@ Outcome compare_runs(const RunRow& a, const RunRow& b, ErrorMetric metric) {
 WltTable won_lost_tie(const std::vector<RunRow>& runs, const std::vector<std::string>& order, ErrorMetric metric) {
   WltTable t;
   t.methods = order;
-  t.metric = metric == ErrorMetric::ate_rmse ? "ATE RMSE" : "translational RPE";
+  t.metric = metric_name(metric);
   const size_t n = order.size();
   t.wlt.assign(n, std::vector<WltCell>(n));
   t.ratio.assign(n, std::vector<std::optional<double>>(n));
@@ -294,7 +309,8 @@ std::string results_to_csv(const std::vector<RunRow>& runs) {
         opt(r.ate_rmse_m), opt(r.rpe_trans_m_per_s), opt(r.rpe_rot_deg_per_s), number(r.fps), number(r.ms.read),
         number(r.ms.preprocess), number(r.ms.track), number(r.ms.integrate), number(r.ms.raycast),
         number(r.ms.total), number(r.wall_s), number(r.coverage), std::to_string(r.lost_spells),
-        std::to_string(r.longest_lost_spell), number(r.worst_frame_ms)};
+        std::to_string(r.longest_lost_spell), number(r.worst_frame_ms), opt(r.rpe_frame_trans_m),
+        opt(r.rpe_frame_rot_deg)};
     for (size_t k = 0; k < fields.size(); ++k) out << (k ? "," : "") << fields[k];
     out << "\n";
   }
@@ -407,6 +423,8 @@ std::vector<RunRow> results_from_csv(const std::string& text, const std::string&
     r.lost_spells = to_long(21);
     r.longest_lost_spell = to_long(22);
     r.worst_frame_ms = to_double(23);
+    r.rpe_frame_trans_m = to_opt(24);
+    r.rpe_frame_rot_deg = to_opt(25);
     runs.push_back(std::move(r));
   }
   return runs;
@@ -452,11 +470,15 @@ nlohmann::json results_to_json(const BenchResults& results) {
                     {"coverage", r.coverage},
                     {"lost_spells", r.lost_spells},
                     {"longest_lost_spell", r.longest_lost_spell},
-                    {"worst_frame_ms", r.worst_frame_ms}});
+                    {"worst_frame_ms", r.worst_frame_ms},
+                    {"rpe_frame_trans_m", optional_json(r.rpe_frame_trans_m)},
+                    {"rpe_frame_rot_deg", optional_json(r.rpe_frame_rot_deg)}});
   }
   j["runs"] = runs;
   j["won_lost_tie"] = wlt_to_json(won_lost_tie(results.runs, results.methods));
   j["won_lost_tie_rpe"] = wlt_to_json(won_lost_tie(results.runs, results.methods, ErrorMetric::rpe_translation));
+  j["won_lost_tie_rpe_frame"] =
+      wlt_to_json(won_lost_tie(results.runs, results.methods, ErrorMetric::rpe_frame_translation));
   return j;
 }
 
@@ -522,6 +544,9 @@ BenchResults results_from_json(const nlohmann::json& j, const std::string& file)
       row.lost_spells = r.value("lost_spells", 0L);
       row.longest_lost_spell = r.value("longest_lost_spell", 0L);
       row.worst_frame_ms = r.value("worst_frame_ms", 0.0);
+      // Older files have no per-frame RPE.
+      if (r.contains("rpe_frame_trans_m")) row.rpe_frame_trans_m = optional_from(r.at("rpe_frame_trans_m"));
+      if (r.contains("rpe_frame_rot_deg")) row.rpe_frame_rot_deg = optional_from(r.at("rpe_frame_rot_deg"));
       b.runs.push_back(std::move(row));
     }
     return b;
@@ -542,9 +567,11 @@ std::string results_to_markdown(const BenchResults& results, const std::vector<s
      << "| machine | " << m.cores << " cores, " << m.cpu_model << " |\n"
      << "| date | " << m.date_utc << " |\n"
      << "| settings | " << results.settings << " |\n\n"
-     << "ATE RMSE after Horn alignment and RPE over 1 s, both as the TUM benchmark scripts compute them "
-     << "(slam/eval.h). Times are milliseconds per processed frame, per stage; fps = frames / sum of stage times. "
-     << "\"(peer)\" rows are PCL's GICP / NDT run frame-to-frame through PCL's API (no map): read, back-projection "
+     << "ATE RMSE after Horn alignment, RPE over 1 s (evaluate_rpe.py --fixed_delta --delta 1 --delta_unit s; "
+     << "'-' where the run is shorter than 1 s) and RPE per frame pair (the same script with --delta_unit f: "
+     << "consecutive poses, metres and degrees per frame), all as the TUM benchmark scripts compute them "
+     << "(slam/eval.h, bench/harness/frame_rpe.h). Times are milliseconds per processed frame, per stage; fps = frames / sum of stage times. "
+     << "\"(peer)\" rows are PCL's (GICP, NDT) or Open3D's (o3d-*) registration run frame-to-frame through their API (no map): read, back-projection "
      << "(preprocess) and alignment (track). Pareto: not beaten on both time and ATE by another run on that "
      << "input.\n\n";
   if (!results.notes.empty()) {
@@ -567,20 +594,23 @@ std::string results_to_markdown(const BenchResults& results, const std::vector<s
     std::set<size_t> front;
     for (size_t k : pareto_front(points)) front.insert(k);
     md << "### " << input << "\n\n" << rows.front()->source << "\n\n"
-       << "| method | ATE RMSE [m] | RPE [m/s] | RPE [deg/s] | frames | lost | coverage | lost spells (longest) | "
-          "fps | read | preprocess | track | integrate | raycast | total [ms] | worst frame [ms] | Pareto |\n"
-       << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
+       << "| method | ATE RMSE [m] | RPE 1 s [m/s] | RPE 1 s [deg/s] | RPE frame [m] | RPE frame [deg] | frames | lost | "
+          "coverage | lost spells (longest) | fps | read | preprocess | track | integrate | raycast | total [ms] | "
+          "worst frame [ms] | Pareto |\n"
+       << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
     for (size_t k = 0; k < rows.size(); ++k) {
       const RunRow& r = *rows[k];
       md << "| " << r.display_name() << " | ";
       if (r.failed) {
         std::string error = r.error;
         std::replace(error.begin(), error.end(), '|', '/');
-        md << "failed: " << error << " | | | | | | | | | | | | | | | |\n";
+        md << "failed: " << error << " | | | | | | | | | | | | | | | | | |\n";
         continue;
       }
       md << metres(r.ate_rmse_m) << " | " << metres(r.rpe_trans_m_per_s) << " | "
-         << (r.rpe_rot_deg_per_s ? fixed(*r.rpe_rot_deg_per_s, 3) : std::string("-")) << " | " << r.frames
+         << (r.rpe_rot_deg_per_s ? fixed(*r.rpe_rot_deg_per_s, 3) : std::string("-")) << " | "
+         << metres(r.rpe_frame_trans_m) << " | "
+         << (r.rpe_frame_rot_deg ? fixed(*r.rpe_frame_rot_deg, 3) : std::string("-")) << " | " << r.frames
          << (r.interrupted ? " (interrupted)" : "") << " | " << r.frames_lost << " | "
          << fixed(100.0 * r.coverage, 1) << " % | " << r.lost_spells << " (" << r.longest_lost_spell << ") | "
          << fixed(r.fps, 1) << " | " << fixed(r.ms.read, 1) << " | " << fixed(r.ms.preprocess, 1) << " | " << fixed(r.ms.track, 1) << " | "
@@ -602,8 +632,11 @@ std::string results_to_markdown(const BenchResults& results, const std::vector<s
         "table below compares them on the same inputs).\n\n";
 
   md << "## Won-lost-tie (ATE RMSE)\n\n" << format_wlt_markdown(won_lost_tie(results.runs, results.methods)) << "\n";
-  md << "## Won-lost-tie (translational RPE)\n\n"
+  md << "## Won-lost-tie (translational RPE over 1 s)\n\n"
      << format_wlt_markdown(won_lost_tie(results.runs, results.methods, ErrorMetric::rpe_translation)) << "\n";
+  md << "## Won-lost-tie (translational RPE per frame pair)\n\n"
+     << format_wlt_markdown(won_lost_tie(results.runs, results.methods, ErrorMetric::rpe_frame_translation))
+     << "\n";
 
   if (!plot_files.empty()) {
     md << "## Speed against error\n\n";

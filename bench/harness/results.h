@@ -47,6 +47,9 @@ struct RunRow {
   long lost_spells = 0, longest_lost_spell = 0;
   double worst_frame_ms = 0.0;
   std::optional<double> ate_rmse_m, rpe_trans_m_per_s, rpe_rot_deg_per_s;
+  // RPE between consecutive estimated poses (bench/harness/frame_rpe.h: evaluate_rpe.py --delta 1 --delta_unit f),
+  // RMSE in metres / degrees per frame pair: exists where the 1 s RPE does not fit (runs shorter than 1 s).
+  std::optional<double> rpe_frame_trans_m, rpe_frame_rot_deg;
   double fps = 0.0;        // frames / sum of per-frame stage times
   StageMs ms;
   double wall_s = 0.0;     // the whole run, including opening the input
@@ -75,9 +78,12 @@ struct BenchResults {
 };
 
 enum class Outcome { win, loss, tie };
-// The error a table compares: ATE RMSE (m) or translational RPE (m/s), both as the TUM tools compute them. The
-// rules above apply to either; a run is comparable by RPE when it is comparable and has an RPE.
-enum class ErrorMetric { ate_rmse, rpe_translation };
+// The error a table compares: ATE RMSE (m), translational RPE over 1 s (m/s) or translational RPE per frame pair
+// (m, delta = 1 frame), all as the TUM tools compute them. The rules above apply to each; a run is comparable by an
+// RPE when it is comparable and has that RPE.
+enum class ErrorMetric { ate_rmse, rpe_translation, rpe_frame_translation };
+// "ATE RMSE", "translational RPE (1 s)", "translational RPE (1 frame)".
+std::string metric_name(ErrorMetric metric);
 std::optional<double> run_error(const RunRow& run, ErrorMetric metric);
 bool comparable_by(const RunRow& run, ErrorMetric metric);
 // The outcome for `a` against `b` on one input (rules above).
@@ -95,7 +101,7 @@ struct WltTable {
   std::vector<std::vector<std::optional<double>>> ratio;
   std::vector<std::vector<int>> common_inputs;  // inputs behind ratio[r][c]
   int inputs = 0;                                // inputs with ground truth taking part
-  std::string metric = "ATE RMSE";               // the error compared ("translational RPE" for rpe_translation)
+  std::string metric = "ATE RMSE";               // the error compared (metric_name)
 };
 
 // Methods are identified by display_name(); `order` gives the row order (names missing from the runs are kept
@@ -131,7 +137,8 @@ std::string results_to_csv(const std::vector<RunRow>& runs);
 std::vector<RunRow> results_from_csv(const std::string& text, const std::string& file);
 
 // results.json: {"machine": {...}, "settings", "methods", "inputs", "notes", "runs": [...],
-//                "won_lost_tie": {"methods", "wlt", "ratio", "rule"}, "won_lost_tie_rpe": the same by RPE};
+//                "won_lost_tie": {"methods", "wlt", "ratio", "rule"}, "won_lost_tie_rpe": the same by RPE over 1 s,
+//                "won_lost_tie_rpe_frame": by RPE per frame pair};
 // null for missing numbers.
 nlohmann::json results_to_json(const BenchResults& results);
 BenchResults results_from_json(const nlohmann::json& j, const std::string& file);

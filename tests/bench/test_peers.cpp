@@ -1,5 +1,8 @@
-// The PCL peer runner: back-projection, and GICP / NDT frame-to-frame odometry on a short synthetic room.
+// The peer runner: back-projection, and PCL GICP / NDT and (where built) Open3D frame-to-frame odometry on a short
+// synthetic room.
 #include <gtest/gtest.h>
+
+#include <algorithm>
 
 #include "bench/harness/peers.h"
 #include "core/error.h"
@@ -45,12 +48,16 @@ TEST(BenchPeers, UnknownPeer) {
   EXPECT_THROW(run_peer(*source, "icp", PeerOptions()), Error);
 }
 
+bool built(const std::string& peer) {
+  const std::vector<std::string> names = peer_names();
+  return std::find(names.begin(), names.end(), peer) != names.end();
+}
+
 // Five frames of the noisy room at 320x240: frame-to-frame GICP / NDT must follow the camera to within a couple of
 // centimetres (each step moves it ~1 cm; the peers' own accuracy on this scene is a few millimetres per pair,
 // bench/results/registration.md).
-TEST(BenchPeers, TracksTheSyntheticRoom) {
-  if (peer_names().empty()) GTEST_SKIP() << "built without PCL: no peers";
-  for (const std::string& method : peer_names()) {
+void expect_tracks_the_room(const std::vector<std::string>& methods) {
+  for (const std::string& method : methods) {
     SCOPED_TRACE(method);
     datasets::SyntheticOptions s;
     s.frames = 5;
@@ -67,6 +74,29 @@ TEST(BenchPeers, TracksTheSyntheticRoom) {
               1e-9);
     const EvalResult e = evaluate_trajectory(source->ground_truth(), est);
     EXPECT_LT(e.ate.error_m.rmse, 0.02);
+  }
+}
+
+TEST(BenchPeers, TracksTheSyntheticRoom) {
+  if (!built("gicp")) GTEST_SKIP() << "built without PCL: no PCL peers";
+  expect_tracks_the_room({"gicp", "ndt"});
+}
+
+// Open3D's point-to-plane ICP, coloured ICP and hybrid RGB-D odometry (bench/open3d_reference.h), built only where
+// libopen3d-dev is installed: the same room, the same bound.
+TEST(BenchPeers, Open3dPeersTrackTheSyntheticRoom) {
+  if (!built("o3d-icp")) {
+    GTEST_SKIP() << "built without Open3D (optional: apt-get install libopen3d-dev, then reconfigure): no Open3D peers";
+  }
+  expect_tracks_the_room({"o3d-icp", "o3d-colored-icp", "o3d-rgbd"});
+}
+
+// A peer of a library this build lacks is refused by name, not run.
+TEST(BenchPeers, PeerOfAMissingLibraryIsRefused) {
+  auto source = datasets::open_synthetic("room", {});
+  for (const std::string peer : {"gicp", "ndt", "o3d-icp", "o3d-colored-icp", "o3d-rgbd"}) {
+    if (built(peer)) continue;
+    EXPECT_THROW(run_peer(*source, peer, PeerOptions()), Error) << peer;
   }
 }
 

@@ -2,9 +2,13 @@
 // registration report), the Pareto front, and the CSV / JSON files read back exactly.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "bench/harness/harness.h"
 #include "bench/harness/results.h"
 #include "core/error.h"
 
@@ -111,6 +115,24 @@ TEST(BenchResults, WonLostTieByRpe) {
   EXPECT_EQ(compare_runs(runs[0], runs[1]), Outcome::win);
 }
 
+// The per-frame-pair RPE is a third metric of its own: only rpe_frame_trans_m decides, the 1 s RPE is ignored.
+TEST(BenchResults, WonLostTieByPerFrameRpe) {
+  std::vector<RunRow> runs = example();
+  for (RunRow& r : runs) {
+    if (r.ate_rmse_m) r.rpe_frame_trans_m = *r.ate_rmse_m / 10.0;
+    if (r.method == "B" && r.input == "i1") r.rpe_frame_trans_m = 0.0001;  // B now beats A on i1
+  }
+  const WltTable by_frame = won_lost_tie(runs, {"A", "B", "C"}, ErrorMetric::rpe_frame_translation);
+  const WltTable by_second = won_lost_tie(runs, {"A", "B", "C"}, ErrorMetric::rpe_translation);
+  EXPECT_EQ(by_frame.wlt[1][0].wins, 0);  // A against B: i1 lost (0.001 vs 0.0001), i2 lost, i3 lost
+  EXPECT_EQ(by_frame.wlt[1][0].losses, 3);
+  ASSERT_TRUE(by_frame.ratio[0][1]);
+  EXPECT_NEAR(*by_frame.ratio[0][1], (0.001 + 0.003) / (0.0001 + 0.0015), 1e-12);
+  EXPECT_EQ(by_second.wlt[1][0].wins + by_second.wlt[1][0].losses, 0);  // no run has a 1 s RPE: all ties
+  EXPECT_NE(format_wlt_markdown(by_frame).find("by translational RPE (1 frame)"), std::string::npos);
+  EXPECT_EQ(metric_name(ErrorMetric::rpe_translation), "translational RPE (1 s)");
+}
+
 TEST(BenchResults, WltMarkdownHasTheReportsForm) {
   const std::string md = format_wlt_markdown(won_lost_tie(example(), {"A", "B", "C"}));
   EXPECT_NE(md.find("| **B** | 1-2-1 | | 1.389 |"), std::string::npos) << md;
@@ -158,6 +180,8 @@ RunRow awkward() {
   r.lost_spells = 3;
   r.longest_lost_spell = 2;
   r.worst_frame_ms = 1.0 / 3.0 + 80.0;
+  r.rpe_frame_trans_m = 1.0 / 9.0;
+  r.rpe_frame_rot_deg = 0.25;
   return r;
 }
 
@@ -187,6 +211,8 @@ void expect_same(const RunRow& a, const RunRow& b) {
   EXPECT_EQ(a.lost_spells, b.lost_spells);
   EXPECT_EQ(a.longest_lost_spell, b.longest_lost_spell);
   EXPECT_EQ(a.worst_frame_ms, b.worst_frame_ms);
+  EXPECT_EQ(a.rpe_frame_trans_m, b.rpe_frame_trans_m);
+  EXPECT_EQ(a.rpe_frame_rot_deg, b.rpe_frame_rot_deg);
 }
 
 std::vector<RunRow> round_trip_rows() {
@@ -254,6 +280,46 @@ TEST(BenchResults, JsonRoundTrip) {
   ASSERT_EQ(back.runs.size(), b.runs.size());
   for (size_t k = 0; k < b.runs.size(); ++k) expect_same(b.runs[k], back.runs[k]);
   EXPECT_THROW(results_from_json(nlohmann::json::object(), "r.json"), ParseError);
+}
+
+// bench --merge: a later folder's row of the same method and input replaces the earlier one, new methods and inputs
+// are appended (peers after hashfusion methods), and the notes name each folder's commit and command.
+TEST(BenchResults, MergeReplacesRowsOfLaterFolders) {
+  const std::filesystem::path root =
+      std::filesystem::temp_directory_path() / ("hf_bench_merge_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(root);
+  BenchResults a;
+  a.machine.commit = "aaa";
+  a.machine.command_line = "hashfusion bench --input first";
+  a.methods = {"icp", "gicp (peer)"};
+  a.inputs = {"i1", "i2"};
+  a.runs = {run("icp", "i1", 0.01), run("icp", "i2", 0.02), run("gicp", "i1", 0.03), run("gicp", "i2", 0.04)};
+  a.runs[2].peer = a.runs[3].peer = true;
+  BenchResults b;
+  b.machine.commit = "bbb";
+  b.machine.command_line = "hashfusion bench --input second";
+  b.methods = {"icp", "o3d-icp (peer)", "sdf"};
+  b.inputs = {"i2", "i3"};
+  b.runs = {run("icp", "i2", 0.005), run("o3d-icp", "i2", 0.06), run("sdf", "i3", 0.07)};
+  b.runs[1].peer = true;
+  std::filesystem::create_directories(root / "a");
+  std::filesystem::create_directories(root / "b");
+  write_results((root / "a").string(), a, {});
+  write_results((root / "b").string(), b, {});
+  const BenchReport r =
+      merge_bench({(root / "a").string(), (root / "b").string()}, (root / "m").string(), "", "hashfusion bench --merge");
+  const BenchResults& m = r.results;
+  EXPECT_EQ(m.methods, (std::vector<std::string>{"icp", "sdf", "gicp (peer)", "o3d-icp (peer)"}));
+  EXPECT_EQ(m.inputs, (std::vector<std::string>{"i1", "i2", "i3"}));
+  ASSERT_EQ(m.runs.size(), 6u);
+  EXPECT_EQ(m.runs[1].input, "i2");
+  EXPECT_EQ(m.runs[1].ate_rmse_m, 0.005);  // b's icp on i2 replaced a's in place
+  ASSERT_EQ(m.notes.size(), 2u);
+  EXPECT_NE(m.notes[0].find("commit aaa"), std::string::npos);
+  EXPECT_NE(m.notes[1].find("hashfusion bench --input second"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(root / "m" / "results.md"));
+  EXPECT_THROW(merge_bench({(root / "none").string()}, (root / "m2").string(), "", ""), Error);
+  std::filesystem::remove_all(root);
 }
 
 TEST(BenchResults, MarkdownHasRowsPerMethodAndMachine) {
