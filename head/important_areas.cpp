@@ -89,7 +89,7 @@ constexpr double kEarMinSpanRho = 1.0;
 
 void find_ears(const std::vector<Eigen::Vector3d>& ph, const std::vector<Eigen::Vector3d>& nh,
                const MeshTopology& topology, const VertexMask& area_mask, double rho, std::vector<Area>& label,
-               std::array<std::string, kAreaCount>& note) {
+               std::array<std::string, kAreaCount>& note, std::array<double, 2>& span_rho) {
   const int n = static_cast<int>(ph.size());
   const double r = std::max(0.4 * rho, 2.5);
   auto in_region = [&](int i) {
@@ -133,6 +133,7 @@ void find_ears(const std::vector<Eigen::Vector3d>& ph, const std::vector<Eigen::
       centroid /= static_cast<double>(best->size());
       for (int i : *best) span = std::max(span, 2.0 * (ph[i] - centroid).norm());
     }
+    span_rho[side] = span / rho;
     if (!best || span < kEarMinSpanRho * rho) {
       char buf[200];
       std::snprintf(buf, sizeof buf,
@@ -186,7 +187,7 @@ ImportantAreas find_important_areas(const TriangleMesh& mesh, const MeshTopology
     const std::vector<Eigen::Vector3f> normals = mls_vertex_normals(mesh, topology);
     std::vector<Eigen::Vector3d> nh(n);
     for (int i = 0; i < n; ++i) nh[i] = frame.R_head_input * normals[i].cast<double>();
-    find_ears(ph, nh, topology, out.area_mask, rho, coarse, out.note);
+    find_ears(ph, nh, topology, out.area_mask, rho, coarse, out.note, out.ear_flap_span_rho);
   }
   // Step 4 on the face area.
   // The widest point is taken among step 1's features above the tip (the outer eye corners on the paper's

@@ -53,6 +53,7 @@ struct ImportantAreas {
   // Per area, why it is absent or how it was found when not by the steps above (empty otherwise): an ear side
   // without an ear-like flap (hair, not scanned), the eyes' fallback band on a mesh whose morphology removed them.
   std::array<std::string, kAreaCount> note{};
+  std::array<double, 2> ear_flap_span_rho{};  // right, left: the largest thin-sheet piece's span (0: none)
 };
 
 int paper_k_for_vertex_count(int n);
