@@ -7,7 +7,8 @@
 //
 // The test runs a coarse configuration (3 mm voxels, 18 frames at 320 x 240, 0.45 m from the head, 10 degrees
 // above it) in seconds; with
-// HF_HEAD_E2E_REPORT=1 it also runs the configurations of bench/results/head.md and prints their tables.
+// HF_HEAD_E2E_REPORT=1 it also runs the configurations of bench/results/head.md and prints their tables; with
+// HF_HEAD_E2E_WRITE=DIR it writes the fused and the (scaled) source mesh there as PLY.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -21,6 +22,7 @@
 #include "fusion/mesh.h"
 #include "head/head_features.h"
 #include "io/mesh_file.h"
+#include "io/ply.h"
 
 namespace hf::head {
 namespace {
@@ -101,6 +103,10 @@ Outcome reconstruct(const TriangleMesh& source, const HeadFeatureResult& on_sour
   }
   const TriangleMesh fused = fusion::extract_mesh(grid);
   const HeadFeatureResult on_fused = detect_head_features(fused, automatic());
+  if (const char* dir = std::getenv("HF_HEAD_E2E_WRITE")) {  // both meshes, for `hashfusion head-features` and a look
+    write_ply(std::string(dir) + "/fused.ply", fused);
+    write_ply(std::string(dir) + "/source_m.ply", world);
+  }
   Outcome out;
   const Eigen::Matrix3d agree = on_fused.frame.R_head_input * on_source.frame.R_head_input.transpose();
   out.axis_cos = agree.diagonal();
