@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <string>
 #include <vector>
@@ -15,6 +16,7 @@
 #include "registration/cpu_backend.h"
 #include "registration/frame_pyramid.h"
 #include "registration/gauss_newton.h"
+#include "registration/opencl/device_pyramid.h"
 #include "registration/opencl/opencl_backend.h"
 #include "reg_test_util.h"
 
@@ -286,6 +288,80 @@ TEST(OpenClBackend, UploadsAKernelBufferOncePerVersion) {
   p = make_problem(pair, 1, "sdf", RobustKernel::huber, pair.T_ref_cur_true, method);
   backend.reduce(p);
   EXPECT_EQ(backend.buffer_uploads(), 4u);
+}
+
+// The largest difference between two maps of one level (float4 maps: x, y, z; w, the validity, must agree), and
+// how many validity flags differ.
+struct MapGap {
+  double max_abs = 0.0;
+  long flags = 0;
+};
+MapGap gap(const Image<hf_float4>& a, const Image<hf_float4>& b) {
+  MapGap g;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const hf_float4 p = a.data()[i], q = b.data()[i];
+    if (p.w != q.w) {
+      ++g.flags;
+      continue;
+    }
+    g.max_abs = std::max({g.max_abs, double(std::fabs(p.x - q.x)), double(std::fabs(p.y - q.y)),
+                          double(std::fabs(p.z - q.z))});
+  }
+  return g;
+}
+double gap(const Image<float>& a, const Image<float>& b) {
+  double m = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) m = std::max(m, double(std::fabs(a.data()[i] - b.data()[i])));
+  return m;
+}
+
+// The frame pyramid on the device (registration/opencl/device_pyramid.h) against build_frame_pyramid: without
+// the bilateral filter every step is the same float operations (the shared per-pixel functions, no contraction,
+// correctly rounded division and square root), so the maps are equal; with it, the device's exp differs from the
+// C++ one by ulps, so the filtered depth moves by float rounding (~1e-7 relative) and normals by as little.
+TEST(DeviceFramePyramid, MatchesTheCpuPyramid) {
+  HF_SKIP_WITHOUT_OPENCL();
+  datasets::SyntheticOptions options;
+  options.preset = "room";
+  options.frames = 2;
+  options.camera = PinholeCamera::preset("ros").scaled(1);  // 320x240
+  const datasets::SyntheticSequence seq(options);
+  const datasets::SyntheticFrame f = seq.frame(1);
+  opencl::DeviceFramePyramid device;
+  for (const bool bilateral : {false, true}) {
+    for (const int first_level : {0, 1}) {
+      FramePyramidOptions po;
+      po.levels = 3;
+      po.bilateral_filter = bilateral;
+      po.first_level = first_level;
+      po.max_depth_m = 4.0f;
+      const FramePyramid a = build_frame_pyramid(f.depth, &f.color, seq.camera(), po);
+      const FramePyramid b = device.build(f.depth, &f.color, seq.camera(), po);
+      ASSERT_EQ(b.num_levels(), a.num_levels());
+      for (int l = 0; l < a.num_levels(); ++l) {
+        const FramePyramidLevel &x = a.levels[size_t(l)], &y = b.levels[size_t(l)];
+        const std::string label = "bilateral " + std::to_string(bilateral) + " first_level " +
+                                  std::to_string(first_level) + " level " + std::to_string(l);
+        ASSERT_EQ(y.vertices.width(), x.vertices.width()) << label;
+        ASSERT_EQ(y.camera.width, x.camera.width) << label;
+        const MapGap v = gap(x.vertices, y.vertices), n = gap(x.normals, y.normals);
+        std::printf("%s: vertices %.2e m (%ld flags), normals %.2e (%ld), intensity %.2e, gradients %.2e\n",
+                    label.c_str(), v.max_abs, v.flags, n.max_abs, n.flags, gap(x.intensity, y.intensity),
+                    std::max(gap(x.grad_x, y.grad_x), gap(x.grad_y, y.grad_y)));
+        EXPECT_EQ(v.flags, 0) << label;
+        EXPECT_EQ(n.flags, 0) << label;
+        EXPECT_LE(v.max_abs, bilateral ? 1e-5 : 0.0) << label;
+        EXPECT_LE(n.max_abs, bilateral ? 1e-3 : 0.0) << label;
+        EXPECT_EQ(gap(x.intensity, y.intensity), 0.0) << label;
+        EXPECT_EQ(gap(x.grad_x, y.grad_x), 0.0) << label;
+        EXPECT_EQ(gap(x.grad_y, y.grad_y), 0.0) << label;
+      }
+    }
+  }
+  FramePyramidOptions holes;
+  holes.fill_holes_levels = 2;
+  EXPECT_THROW(device.build(f.depth, &f.color, seq.camera(), holes), Error);
+  EXPECT_THROW(device.build(f.depth, &f.color, seq.camera().scaled(1)), Error);
 }
 
 TEST(OpenClBackend, MapsAMethodDoesNotReadMayBeNull) {

@@ -1,0 +1,183 @@
+#include "registration/opencl/device_pyramid.h"
+
+#include <cmath>
+#include <utility>
+#include <vector>
+
+#include "core/error.h"
+#include "core/filters.h"
+#include "core/normals.h"
+#include "core/pyramid.h"
+
+namespace hf::opencl {
+
+namespace {
+
+size_t round_up(size_t n, size_t m) { return (n + m - 1) / m * m; }
+
+// A 2-D kernel over w x h items in 8 x 8 groups (a fixed size: PoCL compiles a kernel per work-group size).
+void run_2d(cl::CommandQueue& q, const cl::Kernel& k, int w, int h) {
+  q.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(round_up(size_t(w), 8), round_up(size_t(h), 8)),
+                         cl::NDRange(8, 8));
+}
+
+template <class... Args>
+void set_args(cl::Kernel& kernel, const Args&... args) {
+  cl_uint i = 0;
+  (kernel.setArg(i++, args), ...);
+}
+
+void check_size(int width, int height, const PinholeCamera& camera, const char* what) {
+  if (width != camera.width || height != camera.height)
+    throw Error(std::string("frame pyramid (device): ") + what + " is " + std::to_string(width) + "x" +
+                std::to_string(height) + " but the camera is " + std::to_string(camera.width) + "x" +
+                std::to_string(camera.height));
+}
+
+}  // namespace
+
+struct DeviceFramePyramid::Impl {
+  std::shared_ptr<Context> ctx;
+  cl::CommandQueue queue;
+  cl::Kernel keep, down_depth, down_gaussian, bilateral, vertices, normals, intensity, gradients;
+
+  cl::Buffer buffer(size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE) const {
+    return cl::Buffer(ctx->context(), flags, bytes == 0 ? 1 : bytes);
+  }
+  cl::Buffer half_depth(const cl::Buffer& src, int w, int h, float max_diff_m) {
+    cl::Buffer dst = buffer(size_t(w / 2) * size_t(h / 2) * sizeof(float));
+    set_args(down_depth, src, w, h, max_diff_m, dst);
+    run_2d(queue, down_depth, w / 2, h / 2);
+    return dst;
+  }
+  cl::Buffer half_gaussian(const cl::Buffer& src, int w, int h) {
+    cl::Buffer dst = buffer(size_t(w / 2) * size_t(h / 2) * sizeof(float));
+    set_args(down_gaussian, src, w, h, dst);
+    run_2d(queue, down_gaussian, w / 2, h / 2);
+    return dst;
+  }
+};
+
+DeviceFramePyramid::DeviceFramePyramid(std::shared_ptr<Context> context) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.ctx = std::move(context);
+  if (!m.ctx) throw Error("DeviceFramePyramid: no OpenCL context");
+  try {
+    cl::Program p = m.ctx->program("pyramid", pyramid_program_source(), "-cl-fp32-correctly-rounded-divide-sqrt");
+    m.queue = cl::CommandQueue(m.ctx->context(), m.ctx->device());
+    m.keep = cl::Kernel(p, "hf_pyr_keep_depth");
+    m.down_depth = cl::Kernel(p, "hf_pyr_down_depth");
+    m.down_gaussian = cl::Kernel(p, "hf_pyr_down_gaussian");
+    m.bilateral = cl::Kernel(p, "hf_pyr_bilateral");
+    m.vertices = cl::Kernel(p, "hf_pyr_vertices");
+    m.normals = cl::Kernel(p, "hf_pyr_normals");
+    m.intensity = cl::Kernel(p, "hf_pyr_intensity");
+    m.gradients = cl::Kernel(p, "hf_pyr_gradients");
+  } catch (const Error&) {
+    throw;
+  } catch (...) {
+    rethrow_as_hf_error("frame pyramid on " + m.ctx->info().describe());
+  }
+}
+
+DeviceFramePyramid::~DeviceFramePyramid() = default;
+
+std::string DeviceFramePyramid::device_name() const {
+  return impl_->ctx->info().platform_name + " / " + impl_->ctx->info().device_name;
+}
+
+FramePyramid DeviceFramePyramid::build(const DepthImage& depth, const ColorImage* color, const PinholeCamera& camera,
+                                       const FramePyramidOptions& options) {
+  if (options.levels < 1) throw Error("frame pyramid: levels must be >= 1, got " + std::to_string(options.levels));
+  if (options.first_level < 0 || options.first_level > 4)
+    throw Error("frame pyramid: first_level must be in [0, 4], got " + std::to_string(options.first_level));
+  if (options.fill_holes_levels != 0)
+    throw Error("frame pyramid (device): fill_holes_levels (push-pull) has no device kernel; build on the cpu");
+  check_size(depth.width(), depth.height(), camera, "the depth image");
+  if (color != nullptr) check_size(color->width(), color->height(), camera, "the colour image");
+  // The C++ steps' size rule (pyr_down_*: at least 2 x 2 to halve), checked before anything is enqueued.
+  for (int l = 0, w = camera.width, h = camera.height; l + 1 < options.first_level + options.levels; ++l) {
+    if (w < 2 || h < 2)
+      throw Error("frame pyramid (device): a " + std::to_string(w) + "x" + std::to_string(h) +
+                  " image cannot be halved (need at least 2x2)");
+    w /= 2, h /= 2;
+  }
+  Impl& m = *impl_;
+  const float max_diff_m = 3.0f * kDepthPyramidSigmaR_m;  // build_depth_pyramid's and pyr_down_depth's default
+  FramePyramid pyramid;
+  pyramid.levels.resize(size_t(options.levels));
+  try {
+    cl::CommandQueue& q = m.queue;
+    int w = depth.width(), h = depth.height();
+    cl::Buffer raw = m.buffer(depth.size() * sizeof(float), CL_MEM_READ_ONLY);
+    q.enqueueWriteBuffer(raw, CL_FALSE, 0, depth.size() * sizeof(float), depth.data());
+    cl::Buffer d = m.buffer(depth.size() * sizeof(float));
+    set_args(m.keep, raw, w, h, options.min_depth_m, options.max_depth_m, d);
+    run_2d(q, m.keep, w, h);
+    for (int l = 0; l < options.first_level; ++l, w /= 2, h /= 2) d = m.half_depth(d, w, h, max_diff_m);
+    if (options.bilateral_filter) {
+      const BilateralParams bp;
+      const int radius = bp.radius_px > 0 ? bp.radius_px : int(std::ceil(2.0f * bp.sigma_s_px));
+      cl::Buffer filtered = m.buffer(size_t(w) * size_t(h) * sizeof(float));
+      set_args(m.bilateral, d, w, h, radius, 1.0f / (2.0f * bp.sigma_s_px * bp.sigma_s_px),
+               1.0f / (2.0f * bp.sigma_r_m * bp.sigma_r_m), filtered);
+      run_2d(q, m.bilateral, w, h);
+      d = filtered;
+    }
+    const NormalParams np;
+    for (int l = 0; l < options.levels; ++l) {
+      FramePyramidLevel& level = pyramid.levels[size_t(l)];
+      level.camera = camera.scaled(options.first_level + l);
+      if (l > 0) {
+        d = m.half_depth(d, w, h, max_diff_m);
+        w /= 2, h /= 2;
+      }
+      const size_t n = size_t(w) * size_t(h);
+      cl::Buffer v = m.buffer(n * sizeof(hf_float4)), nn = m.buffer(n * sizeof(hf_float4));
+      hf_intrinsics K = level.camera.kernel_intrinsics();
+      K.width = w, K.height = h;
+      set_args(m.vertices, d, K, v);
+      run_2d(q, m.vertices, w, h);
+      set_args(m.normals, v, w, h, np.max_depth_jump_ratio, nn);
+      run_2d(q, m.normals, w, h);
+      level.vertices = VertexMap(w, h);
+      level.normals = NormalMap(w, h);
+      q.enqueueReadBuffer(v, CL_FALSE, 0, n * sizeof(hf_float4), level.vertices.data());
+      q.enqueueReadBuffer(nn, CL_TRUE, 0, n * sizeof(hf_float4), level.normals.data());
+    }
+    if (color != nullptr) {
+      w = color->width(), h = color->height();
+      cl::Buffer rgb = m.buffer(color->size() * 3, CL_MEM_READ_ONLY);
+      static_assert(sizeof(Rgb8) == 3, "packed rgb");
+      q.enqueueWriteBuffer(rgb, CL_FALSE, 0, color->size() * 3, color->data());
+      cl::Buffer g = m.buffer(color->size() * sizeof(float));
+      set_args(m.intensity, rgb, w, h, g);
+      run_2d(q, m.intensity, w, h);
+      for (int l = 0; l < options.first_level; ++l, w /= 2, h /= 2) g = m.half_gaussian(g, w, h);
+      for (int l = 0; l < options.levels; ++l) {
+        if (l > 0) {
+          g = m.half_gaussian(g, w, h);
+          w /= 2, h /= 2;
+        }
+        FramePyramidLevel& level = pyramid.levels[size_t(l)];
+        const size_t n = size_t(w) * size_t(h);
+        cl::Buffer gx = m.buffer(n * sizeof(float)), gy = m.buffer(n * sizeof(float));
+        set_args(m.gradients, g, w, h, gx, gy);
+        run_2d(q, m.gradients, w, h);
+        level.intensity = Image<float>(w, h);
+        level.grad_x = Image<float>(w, h);
+        level.grad_y = Image<float>(w, h);
+        q.enqueueReadBuffer(g, CL_FALSE, 0, n * sizeof(float), level.intensity.data());
+        q.enqueueReadBuffer(gx, CL_FALSE, 0, n * sizeof(float), level.grad_x.data());
+        q.enqueueReadBuffer(gy, CL_TRUE, 0, n * sizeof(float), level.grad_y.data());
+      }
+    }
+  } catch (const Error&) {
+    throw;
+  } catch (...) {
+    rethrow_as_hf_error("frame pyramid on " + device_name());
+  }
+  return pyramid;
+}
+
+}  // namespace hf::opencl
