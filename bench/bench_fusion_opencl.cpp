@@ -12,6 +12,8 @@
 //   BM_ReadLastFrame            read_last_frame_into: what the pipeline's host copy of the map costs per frame
 //   BM_Raycast/<0 cpu|1 dev>    the tracking raycast of the fused map from the next frames' poses, raycast() against
 //                               DeviceVoxelGrid::raycast (range_ms, march_ms, read_ms: its stages)
+//   BM_FramePyramid/<0 cpu|1 dev> the pipeline's tracking pyramid of one frame: build_frame_pyramid against
+//                               DeviceFramePyramid (upload, kernels, read-back)
 //   BM_Pipeline/<0 cpu|1 opencl> whole slam::Pipeline frames (combined registration) per backend: ms per stage
 //                               and fps, over kPipelineFrames frames after the first
 #include <benchmark/benchmark.h>
@@ -28,6 +30,8 @@
 #include "fusion/integrate.h"
 #include "fusion/raycast.h"
 #include "fusion/opencl/device_voxel_grid.h"
+#include "registration/frame_pyramid.h"
+#include "registration/opencl/device_pyramid.h"
 #include "registration/opencl/opencl_context.h"
 #include "slam/pipeline.h"
 
@@ -187,6 +191,26 @@ BENCHMARK(BM_Raycast)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(kFrames - kWarmupFrames - 1);
+
+// The tracking pyramid of one 640x480 frame as the pipeline builds it (from 320x240: first_level 1, 3 levels,
+// bilateral filter, colour): build_frame_pyramid against DeviceFramePyramid (upload, kernels, read-back).
+void BM_FramePyramid(benchmark::State& state) {
+  const bool device = state.range(0) == 1;
+  const auto& frames = room_frames();
+  hf::FramePyramidOptions options;
+  options.first_level = 1;
+  std::unique_ptr<hf::opencl::DeviceFramePyramid> builder;
+  if (device) builder = std::make_unique<hf::opencl::DeviceFramePyramid>();
+  int next = 0;
+  for (auto _ : state) {
+    const auto& f = frames[size_t(next)];
+    next = (next + 1) % kFrames;
+    const hf::FramePyramid p = device ? builder->build(f.depth, &f.color, room_camera(), options)
+                                      : hf::build_frame_pyramid(f.depth, &f.color, room_camera(), options);
+    benchmark::DoNotOptimize(p.levels.data());
+  }
+}
+BENCHMARK(BM_FramePyramid)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(1.0);
 
 void BM_Pipeline(benchmark::State& state) {
   hf::datasets::SyntheticOptions options;
