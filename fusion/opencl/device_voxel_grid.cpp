@@ -66,7 +66,7 @@ struct DeviceVoxelGrid::Impl {
   cl::Kernel band_ends, bands, find, create, block_frames, incidence, update, gather;
   cl::Kernel clear_range, range, march;
   // The raycast's buffers, per image size (mutable: raycast() is const on the map).
-  cl::Buffer rc_constants, rc_near, rc_far, rc_depth, rc_vertices, rc_normals, rc_hits;
+  cl::Buffer rc_constants, rc_near, rc_far, rc_depth, rc_vertices, rc_normals, rc_hits, rc_hints;
   size_t rc_pixels = 0, rc_tiles = 0;
   DeviceVoxelGrid::RaycastTimes rc_times;
   size_t entries = 0;
@@ -460,7 +460,7 @@ DeviceVoxelGrid::RaycastTimes DeviceVoxelGrid::last_raycast_times() const { retu
 
 void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_camera, const RaycastOptions& options,
                               RaycastResult* out) const {
-  options.validate();
+  options.validate(camera);
   if (camera.width <= 0 || camera.height <= 0 || !(camera.fx > 0.0 && camera.fy > 0.0))
     throw Error("raycast: expected a camera with positive size and focal lengths, got " + camera.describe());
   if (!T_world_camera.is_finite()) throw Error("raycast: expected a finite T_world_camera");
@@ -481,6 +481,7 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
       m.rc_depth = cl::Buffer(c, CL_MEM_WRITE_ONLY, n_pixels * sizeof(float));
       m.rc_vertices = cl::Buffer(c, CL_MEM_WRITE_ONLY, n_pixels * sizeof(hf_float4));
       m.rc_normals = cl::Buffer(c, CL_MEM_WRITE_ONLY, n_pixels * sizeof(hf_float4));
+      m.rc_hints = cl::Buffer(c, CL_MEM_READ_ONLY, n_pixels * sizeof(float));
       m.rc_pixels = n_pixels;
     }
     if (n_tiles > m.rc_tiles) {
@@ -537,10 +538,13 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
     P.K = camera.kernel_intrinsics();
     const cl_uint zero = 0;
     q.enqueueWriteBuffer(m.rc_hits, CL_FALSE, 0, sizeof(zero), &zero);
+    const bool has_hints = options.depth_hint != nullptr;
+    if (has_hints) q.enqueueWriteBuffer(m.rc_hints, CL_FALSE, 0, n_pixels * sizeof(float), options.depth_hint->data());
     set_args(m.march, m.table, cl_uint(m.entries - 1), m.shift, m.options.max_probe, m.pool, m.rc_near, m.rc_far, TW,
              m.rc_constants);
     m.march.setArg(9, sizeof(P), &P);
-    set_args_from(m.march, 10, m.rc_depth, m.rc_vertices, m.rc_normals, m.rc_hits);
+    set_args_from(m.march, 10, m.rc_hints, cl_int(has_hints ? 1 : 0), m.rc_depth, m.rc_vertices, m.rc_normals,
+                  m.rc_hits);
     // 8 x 8 work-groups: a group's rays are one range tile and read neighbouring voxels.
     q.enqueueNDRangeKernel(m.march, cl::NullRange, cl::NDRange(round_up(size_t(W), 8), round_up(size_t(H), 8)),
                            cl::NDRange(8, 8));

@@ -8,7 +8,8 @@
 //                           (range_image of raycast.cpp: the block clipped against the near plane, one pixel of
 //                           slack; the same arithmetic in hf_real), merged with atomic min / max on the bits of the
 //                           non-negative floats (their order is the integers')
-//   hf_raycast_march        per pixel: march() of raycast.cpp over the tile's range (the nearest voxel's bound for
+//   hf_raycast_march        per pixel: around its depth hint first (march_from_hint), then march() of raycast.cpp
+//                           over the tile's range (the nearest voxel's bound for
 //                           cheap steps far in front of the surface, SDF-bounded trilinear steps near it, a missing
 //                           block crossed in one step, the first + to - bracket refined by Illinois regula falsi)
 //                           and the pixel write (depth, vertex; the normal by central differences of trilinear
@@ -17,7 +18,8 @@
 // Not on the device (its results therefore differ from raycast()'s only where two sampling patterns of one field
 // differ, at silhouettes and the fringe of the observed volume, as raycast()'s own skip_blocks and depth_hint
 // options do): the region jump over empty 4^3-block regions (a missing block is crossed one block at a time), the
-// surface-free block skip (the device map keeps no such flags), the depth hint, colour and shading.
+// surface-free block skip (the device map keeps no such flags), colour and shading. A depth hint is searched
+// first as raycast() does (march_from_hint).
 
 #include "fusion/opencl/integrate.cl"  // hf_real, the HF_F_* constants (once per program: the embedder's rule)
 #include "fusion/kernels/raycast_kernels.h"
@@ -229,6 +231,29 @@ inline int hf_raycast_ray(const hf_flat_map* map, const hf_raycast_params* P, co
   return 0;
 }
 
+// raycast.cpp's march_from_hint(): from the sample at the hinted t, forward when in front of the surface, else
+// back towards the camera with SDF-bounded steps until a sample turns positive.
+inline int hf_raycast_from_hint(const hf_flat_map* map, const hf_raycast_params* P, const float* o, const float* d,
+                                float t_hint, float t_min, float t_max, float* t_hit) {
+  float sb = 0.0f;
+  if (!hf_raycast_sample(map, P->min_weight_raw, o[0] + t_hint * d[0], o[1] + t_hint * d[1], o[2] + t_hint * d[2],
+                         &sb))
+    return 0;
+  if (sb >= 0.0f) return hf_raycast_ray(map, P, o, d, t_hint, t_max, t_hit);
+  for (float tb = t_hint;;) {
+    const float ta = tb - hf_raycast_step(sb, P->mu_m, P->step_fraction, P->min_step_m);
+    float sa = 0.0f;
+    if (ta < t_min ||
+        !hf_raycast_sample(map, P->min_weight_raw, o[0] + ta * d[0], o[1] + ta * d[1], o[2] + ta * d[2], &sa))
+      return 0;
+    if (sa >= 0.0f) {
+      *t_hit = hf_raycast_refine(map, P, o, d, ta, sa, tb, sb);
+      return 1;
+    }
+    tb = ta, sb = sa;
+  }
+}
+
 // VolumeSampler::normal (h = 1): central differences of the trilinear samples one voxel apart at p's offset.
 inline hf_float4 hf_raycast_normal(const hf_flat_map* map, int min_weight_raw, const float* p) {
   int c[3];
@@ -254,8 +279,9 @@ inline hf_float4 hf_raycast_normal(const hf_flat_map* map, int min_weight_raw, c
 __kernel void hf_raycast_march(__global const hf_block_entry* table, uint mask, int shift, int max_probe,
                                __global const hf_voxel* pool, __global const float* near_m,
                                __global const float* far_m, int tiles_x, __global const hf_real* f,
-                               hf_raycast_params P, __global float* depth, __global float4* vertices,
-                               __global float4* normals, volatile __global uint* hits) {
+                               hf_raycast_params P, __global const float* hints, int has_hints,
+                               __global float* depth, __global float4* vertices, __global float4* normals,
+                               volatile __global uint* hits) {
   const int x = (int)get_global_id(0), y = (int)get_global_id(1);
   if (x >= P.K.width || y >= P.K.height) return;
   const int pixel = y * P.K.width + x;
@@ -274,11 +300,20 @@ __kernel void hf_raycast_march(__global const hf_block_entry* table, uint mask, 
   float d[3];
   for (int r = 0; r < 3; ++r)
     d[r] = ((P.R_wc[3 * r] * u[0] + P.R_wc[3 * r + 1] * u[1]) + P.R_wc[3 * r + 2] * u[2]) / P.voxel_m;
+  float t = 0.0f;
+  int hit = 0;
+  const float hint = has_hints ? hints[pixel] : 0.0f;
+  if (hint > 0.0f && isfinite(hint)) {
+    // RayCaster::cast: the bracket around the depth the frame measured first.
+    const float w = hf_raycast_hint_halfwidth(hint, P.mu_m, P.voxel_m);
+    const float h0 = max(P.min_depth_m, hint - w), h1 = min(P.max_depth_m, hint + w);
+    hit = h0 <= hint && hint <= h1 && hf_raycast_from_hint(&map, &P, P.o_vox, d, hint * len, h0 * len, h1 * len, &t);
+  }
   const int tile = (y / HF_RAYCAST_TILE) * tiles_x + x / HF_RAYCAST_TILE;
   const float z0 = max(P.min_depth_m, near_m[tile] - P.voxel_m);
   const float z1 = min(P.max_depth_m, far_m[tile] + P.voxel_m);
-  float t = 0.0f;
-  if (z0 < z1 && hf_raycast_ray(&map, &P, P.o_vox, d, z0 * len, z1 * len, &t)) {
+  if (!hit) hit = z0 < z1 && hf_raycast_ray(&map, &P, P.o_vox, d, z0 * len, z1 * len, &t);
+  if (hit) {
     const float z = t / len;
     depth[pixel] = z;
     vertices[pixel] = (float4)(dc[0] * z, dc[1] * z, z, 1.0f);

@@ -157,8 +157,8 @@ TEST(DeviceVoxelGrid, LoadedHostMapContinuesAsOnTheCpu) {
 // where both hit the depths agree to far below a voxel and the normals (central differences at the hit) to a
 // fraction of a degree. Hits and misses differ only where the two sampling patterns differ (the CPU also jumps
 // empty 4^3-block regions, the device one block at a time): at silhouettes and the fringe of the observed volume,
-// the class raycast()'s own skip_blocks / depth_hint tests allow (0.1-0.5 % of the pixels). Measured on PoCL: no
-// pixel differs in hit or miss, depths within 1.7e-5 m, no normal 0.5 degrees apart.
+// the class raycast()'s own skip_blocks / depth_hint tests allow (0.1-0.5 % of the pixels). Measured on PoCL, with
+// and without a depth hint: no pixel differs in hit or miss, depths within 1.7e-5 m, no normal 0.5 degrees apart.
 TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
   HF_CONTEXT_OR_SKIP(ctx);
   const VolumeParams volume = params_1cm();
@@ -180,47 +180,61 @@ TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
   ro.skip_blocks = false;  // the device keeps no surface-free flags
   ro.shade = false;
   ro.color = false;
+  // Cast from an unfused pose without a hint, and from a fused frame's pose with its depth as the hint (the
+  // pipeline's tracking raycast: each ray searches around the measured depth first).
+  const auto hinted = seq.frame(8);
+  for (const bool hint : {false, true}) {
+    const SE3 pose = hint ? hinted.T_world_camera : seq.frame(11).T_world_camera;
+    RaycastOptions o = ro;
+    if (hint) o.depth_hint = &hinted.depth;
+    const RaycastResult a = raycast(cpu, camera, pose, o);
+    RaycastResult b;
+    device.raycast(camera, pose, o, &b);
+    ASSERT_EQ(b.depth.width(), camera.width);
+    long both = 0, one = 0, depth_off = 0, normal_off = 0, normals = 0;
+    double max_depth = 0.0;
+    for (int y = 0; y < camera.height; ++y)
+      for (int x = 0; x < camera.width; ++x) {
+        const bool ha = a.depth(x, y) > 0.0f, hb = b.depth(x, y) > 0.0f;
+        if (ha != hb) {
+          ++one;
+          continue;
+        }
+        if (!ha) continue;
+        ++both;
+        const double dd = std::fabs(double(a.depth(x, y)) - double(b.depth(x, y)));
+        max_depth = std::max(max_depth, dd);
+        depth_off += dd > 1e-4;  // 0.01 voxel
+        const hf_float4 na = a.normals(x, y), nb = b.normals(x, y);
+        EXPECT_EQ(b.vertices(x, y).w, 1.0f);
+        if (na.w == 0.0f || nb.w == 0.0f) {
+          normal_off += na.w != nb.w;
+          continue;
+        }
+        ++normals;
+        normal_off += hf_dot3(na, nb) < std::cos(0.5 * 3.14159265358979 / 180.0);
+      }
+    std::printf("raycast (hint %d): %ld pixels hit on both, %ld on one, %ld depths > 0.01 voxel apart (max %.2e m), "
+                "%ld normals > 0.5 deg apart of %ld\n", int(hint), both, one, depth_off, max_depth, normal_off,
+                normals);
+    EXPECT_GT(both, long(camera.width) * camera.height / 2);
+    EXPECT_EQ(b.hit_count, int(std::count_if(b.depth.data(), b.depth.data() + b.depth.width() * b.depth.height(),
+                                             [](float d) { return d > 0.0f; })));
+    EXPECT_LE(one, long(camera.width) * camera.height / 200);
+    EXPECT_LE(depth_off, both / 200);
+    EXPECT_LE(normal_off, both / 200);
+  }
   const SE3 pose = seq.frame(11).T_world_camera;
-  const RaycastResult a = raycast(cpu, camera, pose, ro);
   RaycastResult b;
-  device.raycast(camera, pose, ro, &b);
-  ASSERT_EQ(b.depth.width(), camera.width);
-  long both = 0, one = 0, depth_off = 0, normal_off = 0, normals = 0;
-  double max_depth = 0.0;
-  for (int y = 0; y < camera.height; ++y)
-    for (int x = 0; x < camera.width; ++x) {
-      const bool ha = a.depth(x, y) > 0.0f, hb = b.depth(x, y) > 0.0f;
-      if (ha != hb) {
-        ++one;
-        continue;
-      }
-      if (!ha) continue;
-      ++both;
-      const double dd = std::fabs(double(a.depth(x, y)) - double(b.depth(x, y)));
-      max_depth = std::max(max_depth, dd);
-      depth_off += dd > 1e-4;  // 0.01 voxel
-      const hf_float4 na = a.normals(x, y), nb = b.normals(x, y);
-      EXPECT_EQ(b.vertices(x, y).w, 1.0f);
-      if (na.w == 0.0f || nb.w == 0.0f) {
-        normal_off += na.w != nb.w;
-        continue;
-      }
-      ++normals;
-      normal_off += hf_dot3(na, nb) < std::cos(0.5 * 3.14159265358979 / 180.0);
-    }
-  std::printf("raycast: %ld pixels hit on both, %ld on one, %ld depths > 0.01 voxel apart (max %.2e m), %ld "
-              "normals > 0.5 deg apart of %ld\n", both, one, depth_off, max_depth, normal_off, normals);
-  EXPECT_GT(both, long(camera.width) * camera.height / 2);
-  EXPECT_EQ(b.hit_count, int(std::count_if(b.depth.data(), b.depth.data() + b.depth.width() * b.depth.height(),
-                                           [](float d) { return d > 0.0f; })));
-  EXPECT_LE(one, long(camera.width) * camera.height / 200);
-  EXPECT_LE(depth_off, both / 200);
-  EXPECT_LE(normal_off, both / 200);
   // A bad pose or options: hf::Error, as raycast().
   const SE3 nan_pose(Eigen::Quaterniond::Identity(), Eigen::Vector3d(std::numeric_limits<double>::quiet_NaN(), 0, 0));
   EXPECT_THROW(device.raycast(camera, nan_pose, ro, &b), Error);
   RaycastOptions bad = ro;
   bad.step_fraction = 1.5;
+  EXPECT_THROW(device.raycast(camera, pose, bad, &b), Error);
+  const DepthImage small(camera.width / 2, camera.height / 2, 1.0f);
+  bad = ro;
+  bad.depth_hint = &small;  // not the camera's size
   EXPECT_THROW(device.raycast(camera, pose, bad, &b), Error);
 }
 
