@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <ostream>
 #include <string>
 #include <vector>
 #include <random>
@@ -108,6 +109,8 @@ struct HeadCase {
   bool ears;
   std::vector<std::string> loose;  // areas (name before the '.') held to 1.6 rho instead of rho
 };
+
+void PrintTo(const HeadCase& c, std::ostream* os) { *os << c.file; }
 
 class RealHead : public ::testing::TestWithParam<HeadCase> {};
 

@@ -15,7 +15,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <map>
+#include <cmath>
 
 #include "datasets/mesh_orbit.h"
 #include "fusion/integrate.h"
@@ -63,6 +65,9 @@ struct Config {
   double max_incidence_deg = 70.0;
   double elevation_deg = 10.0;
   double swing_deg = 0.0;
+  // A second ring of as many frames at this elevation (NaN: none), seeing what the first ring cannot (from 10 degrees
+  // above: the nose's and the chin's undersides, the nostrils).
+  double second_elevation_deg = std::numeric_limits<double>::quiet_NaN();
 };
 
 Outcome reconstruct(const TriangleMesh& source, const HeadFeatureResult& on_source, const Config& config) {
@@ -100,6 +105,15 @@ Outcome reconstruct(const TriangleMesh& source, const HeadFeatureResult& on_sour
   for (int i = 0; i < config.frames; ++i) {
     const datasets::SyntheticFrame f = datasets::mesh_orbit_frame(world, orbit, i);
     fusion::integrate(grid, f.depth, f.color, orbit.camera, f.T_world_camera, integrate);
+  }
+  if (std::isfinite(config.second_elevation_deg)) {
+    datasets::MeshOrbitOptions below = orbit;
+    below.elevation_deg = config.second_elevation_deg;
+    below.seed = orbit.seed + 1;  // other noise than the first ring's
+    for (int i = 0; i < config.frames; ++i) {
+      const datasets::SyntheticFrame f = datasets::mesh_orbit_frame(world, below, i);
+      fusion::integrate(grid, f.depth, f.color, below.camera, f.T_world_camera, integrate);
+    }
   }
   const TriangleMesh fused = fusion::extract_mesh(grid);
   const HeadFeatureResult on_fused = detect_head_features(fused, automatic());
@@ -144,9 +158,9 @@ Outcome reconstruct(const TriangleMesh& source, const HeadFeatureResult& on_sour
 }
 
 void print(const char* what, const Config& c, const Outcome& o) {
-  std::printf("%s: %.1f mm voxels, %d frames, %s, incidence <= %.0f deg, elevation %.0f +- %.0f deg: fused %zu vertices, frame axes cos %.2f %.2f %.2f, "
+  std::printf("%s: %.1f mm voxels, %d frames, %s, incidence <= %.0f deg, elevation %.0f +- %.0f deg (second ring %.0f): fused %zu vertices, frame axes cos %.2f %.2f %.2f, "
               "control points %d (source %d), matched %zu, nose tip %.2f vox, median %.2f vox, within 2 vox %.0f %%\n",
-              what, c.voxel_m * 1e3, c.frames, c.noise ? "Kinect noise" : "no noise", c.max_incidence_deg, c.elevation_deg, c.swing_deg, o.fused_vertices,
+              what, c.voxel_m * 1e3, c.frames, c.noise ? "Kinect noise" : "no noise", c.max_incidence_deg, c.elevation_deg, c.swing_deg, c.second_elevation_deg, o.fused_vertices,
               o.axis_cos.x(), o.axis_cos.y(), o.axis_cos.z(), o.fused_points, o.source_points, o.distance_vox.size(), o.nose_tip_vox,
               o.median_vox(), 100 * o.fraction_within(2.0));
   std::map<std::string, std::vector<double>> groups;  // by area: eye_right, lips, nose, ...
@@ -183,7 +197,8 @@ TEST(HeadReconstruction, FusedControlPointsMatchTheSource) {
   if (std::getenv("HF_HEAD_E2E_REPORT")) {
     for (const Config& c : {Config{0.002, 36, true, 70}, Config{0.002, 36, false, 70}, Config{0.003, 36, true, 70},
                             Config{0.004, 36, true, 70}, Config{0.003, 18, true, 80}, Config{0.002, 36, true, 80},
-                            Config{0.003, 18, true, 70, -20.0}, Config{0.003, 36, true, 70, 10.0, 20.0}})
+                            Config{0.003, 18, true, 70, -20.0}, Config{0.003, 36, true, 70, 10.0, 20.0},
+                            Config{0.003, 18, true, 70, 10.0, 0.0, -20.0}, Config{0.003, 18, true, 70, 10.0, 0.0, -30.0}})
       print("report", c, reconstruct(source, on_source, c));
   }
 }
