@@ -64,7 +64,8 @@ struct DeviceVoxelGrid::Impl {
   DeviceGridOptions options;
   bool fp64 = false;
   cl::Kernel band_ends, bands, find, create, block_frames, incidence, update, gather;
-  cl::Kernel clear_range, range, march;
+  cl::Kernel clear_range, range, march, surface_free;
+  cl::Buffer flags;  // per pool slot: VoxelBlockGrid::surface_free (uint 0/1), for the raycast's block skip
   // The raycast's buffers, per image size (mutable: raycast() is const on the map).
   cl::Buffer rc_constants, rc_near, rc_far, rc_depth, rc_vertices, rc_normals, rc_hits, rc_hints;
   size_t rc_pixels = 0, rc_tiles = 0;
@@ -167,6 +168,7 @@ DeviceVoxelGrid::DeviceVoxelGrid(const VolumeParams& params, std::shared_ptr<ope
     m.clear_range = cl::Kernel(program, "hf_raycast_clear_range");
     m.range = cl::Kernel(program, "hf_raycast_range");
     m.march = cl::Kernel(program, "hf_raycast_march");
+    m.surface_free = cl::Kernel(program, "hf_fusion_surface_free");
     const cl::Context& c = m.ctx->context();
     m.table = cl::Buffer(c, CL_MEM_READ_WRITE, m.entries * sizeof(Entry));
     m.stamps = cl::Buffer(c, CL_MEM_READ_WRITE, m.entries * sizeof(std::uint32_t));
@@ -178,6 +180,8 @@ DeviceVoxelGrid::DeviceVoxelGrid(const VolumeParams& params, std::shared_ptr<ope
     m.rc_constants = cl::Buffer(c, CL_MEM_READ_ONLY, kFrameConstants * (m.fp64 ? sizeof(double) : sizeof(float)));
     m.rc_hits = cl::Buffer(c, CL_MEM_READ_WRITE, sizeof(cl_uint));
     m.ctx->queue().enqueueFillBuffer(m.pool, std::uint32_t(0), 0, pool_bytes);
+    m.flags = cl::Buffer(c, CL_MEM_READ_WRITE, params_.capacity_blocks * sizeof(std::uint32_t));
+    m.ctx->queue().enqueueFillBuffer(m.flags, std::uint32_t(0), 0, params_.capacity_blocks * sizeof(std::uint32_t));
   } catch (const Error&) {
     throw;
   } catch (...) {
@@ -200,7 +204,10 @@ void DeviceVoxelGrid::clear() {
     q.enqueueFillBuffer(m.stamps, std::uint32_t(0), 0, m.entries * sizeof(std::uint32_t));
     // A block is zero (unobserved) when it is created: slots are handed out from 0 up, so only the slots handed
     // out since the pool was zeroed (all of it, in the constructor) need zeroing again.
-    if (m.pool_next > 0) q.enqueueFillBuffer(m.pool, std::uint32_t(0), 0, m.pool_next * sizeof(VoxelBlock));
+    if (m.pool_next > 0) {
+      q.enqueueFillBuffer(m.pool, std::uint32_t(0), 0, m.pool_next * sizeof(VoxelBlock));
+      q.enqueueFillBuffer(m.flags, std::uint32_t(0), 0, m.pool_next * sizeof(std::uint32_t));  // never skip
+    }
     q.finish();
   } catch (...) {
     opencl::rethrow_as_hf_error(m.where());
@@ -330,6 +337,9 @@ IntegrateStats DeviceVoxelGrid::integrate(const DepthImage& depth, const ColorIm
       q.enqueueNDRangeKernel(m.update, cl::NullRange,
                              cl::NDRange(round_up(size_t(n_visible) * HF_VOXELS_PER_BLOCK, kUpdateGroup)),
                              cl::NDRange(kUpdateGroup));
+      // The updated blocks' surface-free flags, as integrate() sets them on the host grid.
+      set_args(m.surface_free, m.visible, n_visible, m.table, m.pool, m.flags, m.counters);
+      enqueue_1d(q, m.surface_free, n_visible);
       c = m.read_counters();
     }
     stats.update_ms = ms_since(t1);
@@ -361,8 +371,10 @@ void DeviceVoxelGrid::load(const VoxelBlockGrid& grid) {
   // The table and the pool built here, in block_coords() order, with the device's probe bound.
   std::vector<Entry> table(m.entries, Entry{0, 0, 0, 0});
   std::vector<Voxel> pool(blocks.size() * HF_VOXELS_PER_BLOCK);
+  std::vector<std::uint32_t> flags(blocks.size());
   for (size_t slot = 0; slot < blocks.size(); ++slot) {
     const BlockCoord& c = blocks[slot].first;
+    flags[slot] = grid.surface_free(c) ? 1u : 0u;
     std::uint32_t e = hf_block_home(c.x, c.y, c.z, m.shift);
     int probe = 0;
     while (table[e].value != 0 && probe < m.options.max_probe) e = (e + 1) & std::uint32_t(m.entries - 1), ++probe;
@@ -377,7 +389,10 @@ void DeviceVoxelGrid::load(const VoxelBlockGrid& grid) {
   try {
     cl::CommandQueue& q = m.ctx->queue();
     q.enqueueWriteBuffer(m.table, CL_FALSE, 0, table.size() * sizeof(Entry), table.data());
-    if (!pool.empty()) q.enqueueWriteBuffer(m.pool, CL_FALSE, 0, pool.size() * sizeof(Voxel), pool.data());
+    if (!pool.empty()) {
+      q.enqueueWriteBuffer(m.pool, CL_FALSE, 0, pool.size() * sizeof(Voxel), pool.data());
+      q.enqueueWriteBuffer(m.flags, CL_FALSE, 0, flags.size() * sizeof(std::uint32_t), flags.data());
+    }
     q.finish();
   } catch (...) {
     opencl::rethrow_as_hf_error(m.where());
@@ -445,9 +460,10 @@ struct RaycastParams {
   float o_vox[3];
   float mu_m, step_fraction, min_step_m, voxel_m, refine_tol_m, min_depth_m, max_depth_m;
   cl_int min_weight_raw;
+  cl_int skip_blocks;
   hf_intrinsics K;
 };
-static_assert(sizeof(RaycastParams) == 4 * (9 + 3 + 7 + 1) + sizeof(hf_intrinsics), "hf_raycast_params");
+static_assert(sizeof(RaycastParams) == 4 * (9 + 3 + 7 + 2) + sizeof(hf_intrinsics), "hf_raycast_params");
 
 template <class T>
 void ensure_image(Image<T>* img, int w, int h) {
@@ -535,15 +551,16 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
     P.min_depth_m = float(options.min_depth_m);
     P.max_depth_m = float(options.max_depth_m);
     P.min_weight_raw = std::max(1, int(hf_quantise_weight(std::max(0.0f, options.min_weight))));
+    P.skip_blocks = options.skip_blocks ? 1 : 0;
     P.K = camera.kernel_intrinsics();
     const cl_uint zero = 0;
     q.enqueueWriteBuffer(m.rc_hits, CL_FALSE, 0, sizeof(zero), &zero);
     const bool has_hints = options.depth_hint != nullptr;
     if (has_hints) q.enqueueWriteBuffer(m.rc_hints, CL_FALSE, 0, n_pixels * sizeof(float), options.depth_hint->data());
-    set_args(m.march, m.table, cl_uint(m.entries - 1), m.shift, m.options.max_probe, m.pool, m.rc_near, m.rc_far, TW,
-             m.rc_constants);
-    m.march.setArg(9, sizeof(P), &P);
-    set_args_from(m.march, 10, m.rc_hints, cl_int(has_hints ? 1 : 0), m.rc_depth, m.rc_vertices, m.rc_normals,
+    set_args(m.march, m.table, cl_uint(m.entries - 1), m.shift, m.options.max_probe, m.pool, m.flags, m.rc_near,
+             m.rc_far, TW, m.rc_constants);
+    m.march.setArg(10, sizeof(P), &P);
+    set_args_from(m.march, 11, m.rc_hints, cl_int(has_hints ? 1 : 0), m.rc_depth, m.rc_vertices, m.rc_normals,
                   m.rc_hits);
     // 8 x 8 work-groups: a group's rays are one range tile and read neighbouring voxels.
     q.enqueueNDRangeKernel(m.march, cl::NullRange, cl::NDRange(round_up(size_t(W), 8), round_up(size_t(H), 8)),

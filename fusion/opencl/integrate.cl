@@ -2,7 +2,7 @@
 // fusion/opencl/device_voxel_grid.h. Embedded into the binary by registration/opencl/embed_opencl.cmake (the shared
 // headers inlined) and built once per context by device_voxel_grid.cpp.
 //
-// One frame is seven kernels, in order:
+// One frame is eight kernels, in order:
 //   hf_fusion_band_ends     per pixel: the truncation band [d - mu, d + mu] of its ray in block units and its end
 //                           cells, the same arithmetic and order as the CPU's phase 1 (band_row, integrate_cpu.cpp)
 //   hf_fusion_bands         per pixel: the blocks its band crosses (Amanatides-Woo, traverse in integrate.cpp),
@@ -18,6 +18,7 @@
 //   hf_point_to_plane       per pixel (point-to-plane only): hf_point_to_plane_factor
 //   hf_fusion_update        per voxel of a visible block: hf_voxel_pixel + hf_integrate_voxel_at, the shared kernel
 //                           the CPU loops call
+//   hf_fusion_surface_free  per visible block: its surface-free flag (VoxelBlockGrid::surface_free), for the raycast
 // Every kernel after hf_fusion_create returns at once when the error flag is set.
 //
 // Build options set by the host:
@@ -339,6 +340,20 @@ __kernel void hf_fusion_update(__global const uint* visible, uint n, __global co
   }
   barrier(CLK_LOCAL_MEM_FENCE);
   if (get_local_id(0) == 0 && group_updated != 0u) atomic_add(&counters[HF_C_UPDATED], group_updated);
+}
+
+// VoxelBlockGrid::surface_free per visible block after the update (block_is_surface_free: no observed voxel with
+// sdf <= 0), into flags[pool slot], for the raycast's block skip. One work-item per block.
+__kernel void hf_fusion_surface_free(__global const uint* visible, uint n, __global const hf_block_entry* table,
+                                     __global const hf_voxel* pool, __global uint* flags,
+                                     volatile __global uint* counters) {
+  const uint i = (uint)get_global_id(0);
+  if (i >= n || counters[HF_C_ERROR] != 0u) return;
+  const uint slot = table[visible[i]].value - 1u;
+  __global const hf_voxel* v = pool + (ulong)slot * HF_VOXELS_PER_BLOCK;
+  uint surface = 0u;
+  for (int k = 0; k < HF_VOXELS_PER_BLOCK; ++k) surface |= (uint)(v[k].weight != 0 && v[k].sdf <= 0);
+  flags[slot] = surface ? 0u : 1u;
 }
 
 // The blocks of a visible list side by side, with their entries (the host copy of one frame's blocks): one

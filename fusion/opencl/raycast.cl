@@ -17,8 +17,9 @@
 //                           raycast_kernels.h's hf_trilinear, the CPU's own interpolation.
 // Not on the device (its results therefore differ from raycast()'s only where two sampling patterns of one field
 // differ, at silhouettes and the fringe of the observed volume, as raycast()'s own skip_blocks and depth_hint
-// options do): the region jump over empty 4^3-block regions (a missing block is crossed one block at a time), the
-// surface-free block skip (the device map keeps no such flags), colour and shading. A depth hint is searched
+// options do): the region jump over empty 4^3-block regions (a missing block is crossed one block at a time),
+// colour and shading. Surface-free blocks are crossed in one step when skip_blocks is set, from the flags the
+// device's integrate keeps (hf_fusion_surface_free) or load() copies. A depth hint is searched
 // first as raycast() does (march_from_hint).
 
 #include "fusion/opencl/integrate.cl"  // hf_real, the HF_F_* constants (once per program: the embedder's rule)
@@ -101,6 +102,7 @@ typedef struct {
   float o_vox[3];     // the camera centre in continuous voxel coordinates
   float mu_m, step_fraction, min_step_m, voxel_m, refine_tol_m, min_depth_m, max_depth_m;
   int min_weight_raw;
+  int skip_blocks;    // RaycastOptions::skip_blocks: cross surface-free blocks in one step
   hf_intrinsics K;
 } hf_raycast_params;
 
@@ -161,8 +163,8 @@ inline float hf_raycast_block_exit(const float* o, const float* d, int i, int j,
 }
 
 // raycast.cpp's march() without the region jump and the surface-free skip: 1 and *t_hit at a crossing.
-inline int hf_raycast_ray(const hf_flat_map* map, const hf_raycast_params* P, const float* o, const float* d,
-                          float t_min, float t_max, float* t_hit) {
+inline int hf_raycast_ray(const hf_flat_map* map, __global const uint* surface_free, const hf_raycast_params* P,
+                          const float* o, const float* d, float t_min, float t_max, float* t_hit) {
   const float far_sdf = 0.5f;
   const float far_margin_m = 0.8660254f * P->voxel_m;
   const int cheap_steps = far_sdf * P->mu_m - far_margin_m > P->min_step_m;
@@ -187,8 +189,18 @@ inline int hf_raycast_ray(const hf_flat_map* map, const hf_raycast_params* P, co
       have_prev = 0;
       continue;
     }
+    const uint slot = map->table[e].value - 1u;
+    if (P->skip_blocks && surface_free[slot] != 0u && t > fine_until) {
+      // No surface inside this block: one long cheap step to where the ray leaves it; a crossing in the half
+      // voxel along its faces shows as a negative sample right after and sends the ray back here.
+      have_prev = 1, prev_exact = 0;
+      t_prev = t, s_prev = 1.0f;
+      const float exit = hf_raycast_block_exit(o, d, n[0], n[1], n[2]);
+      t = (exit > t ? exit : t) + skip_eps;
+      continue;
+    }
     const hf_voxel nearest =
-        map->pool[(ulong)(map->table[e].value - 1u) * HF_VOXELS_PER_BLOCK +
+        map->pool[(ulong)slot * HF_VOXELS_PER_BLOCK +
                   (ulong)hf_voxel_index(n[0] - HF_BLOCK_SIZE * bx, n[1] - HF_BLOCK_SIZE * by,
                                         n[2] - HF_BLOCK_SIZE * bz)];
     if ((int)nearest.weight < P->min_weight_raw) {
@@ -233,13 +245,14 @@ inline int hf_raycast_ray(const hf_flat_map* map, const hf_raycast_params* P, co
 
 // raycast.cpp's march_from_hint(): from the sample at the hinted t, forward when in front of the surface, else
 // back towards the camera with SDF-bounded steps until a sample turns positive.
-inline int hf_raycast_from_hint(const hf_flat_map* map, const hf_raycast_params* P, const float* o, const float* d,
-                                float t_hint, float t_min, float t_max, float* t_hit) {
+inline int hf_raycast_from_hint(const hf_flat_map* map, __global const uint* surface_free,
+                                const hf_raycast_params* P, const float* o, const float* d, float t_hint, float t_min,
+                                float t_max, float* t_hit) {
   float sb = 0.0f;
   if (!hf_raycast_sample(map, P->min_weight_raw, o[0] + t_hint * d[0], o[1] + t_hint * d[1], o[2] + t_hint * d[2],
                          &sb))
     return 0;
-  if (sb >= 0.0f) return hf_raycast_ray(map, P, o, d, t_hint, t_max, t_hit);
+  if (sb >= 0.0f) return hf_raycast_ray(map, surface_free, P, o, d, t_hint, t_max, t_hit);
   for (float tb = t_hint;;) {
     const float ta = tb - hf_raycast_step(sb, P->mu_m, P->step_fraction, P->min_step_m);
     float sa = 0.0f;
@@ -277,7 +290,8 @@ inline hf_float4 hf_raycast_normal(const hf_flat_map* map, int min_weight_raw, c
 }
 
 __kernel void hf_raycast_march(__global const hf_block_entry* table, uint mask, int shift, int max_probe,
-                               __global const hf_voxel* pool, __global const float* near_m,
+                               __global const hf_voxel* pool, __global const uint* surface_free,
+                               __global const float* near_m,
                                __global const float* far_m, int tiles_x, __global const hf_real* f,
                                hf_raycast_params P, __global const float* hints, int has_hints,
                                __global float* depth, __global float4* vertices, __global float4* normals,
@@ -307,12 +321,13 @@ __kernel void hf_raycast_march(__global const hf_block_entry* table, uint mask, 
     // RayCaster::cast: the bracket around the depth the frame measured first.
     const float w = hf_raycast_hint_halfwidth(hint, P.mu_m, P.voxel_m);
     const float h0 = max(P.min_depth_m, hint - w), h1 = min(P.max_depth_m, hint + w);
-    hit = h0 <= hint && hint <= h1 && hf_raycast_from_hint(&map, &P, P.o_vox, d, hint * len, h0 * len, h1 * len, &t);
+    hit = h0 <= hint && hint <= h1 && hf_raycast_from_hint(&map, surface_free, &P, P.o_vox, d, hint * len, h0 * len,
+                                                                   h1 * len, &t);
   }
   const int tile = (y / HF_RAYCAST_TILE) * tiles_x + x / HF_RAYCAST_TILE;
   const float z0 = max(P.min_depth_m, near_m[tile] - P.voxel_m);
   const float z1 = min(P.max_depth_m, far_m[tile] + P.voxel_m);
-  if (!hit) hit = z0 < z1 && hf_raycast_ray(&map, &P, P.o_vox, d, z0 * len, z1 * len, &t);
+  if (!hit) hit = z0 < z1 && hf_raycast_ray(&map, surface_free, &P, P.o_vox, d, z0 * len, z1 * len, &t);
   if (hit) {
     const float z = t / len;
     depth[pixel] = z;

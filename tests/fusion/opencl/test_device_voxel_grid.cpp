@@ -174,22 +174,30 @@ TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
     const auto f = seq.frame(2 * i);
     integrate(cpu, f.depth, f.color, camera, f.T_world_camera);
   }
-  DeviceVoxelGrid device(volume, ctx);
+  // The host map loaded onto the device (its surface-free flags copied), and the same frames fused there (the
+  // flags its integrate keeps).
+  DeviceVoxelGrid device(volume, ctx), fused(volume, ctx);
   device.load(cpu);
+  for (int i = 0; i < 5; ++i) {
+    const auto f = seq.frame(2 * i);
+    fused.integrate(f.depth, f.color, camera, f.T_world_camera);
+  }
   RaycastOptions ro;
-  ro.skip_blocks = false;  // the device keeps no surface-free flags
   ro.shade = false;
   ro.color = false;
   // Cast from an unfused pose without a hint, and from a fused frame's pose with its depth as the hint (the
-  // pipeline's tracking raycast: each ray searches around the measured depth first).
+  // pipeline's tracking raycast: each ray searches around the measured depth first); surface-free blocks walked
+  // and skipped.
   const auto hinted = seq.frame(8);
-  for (const bool hint : {false, true}) {
+  for (int c = 0; c < 6; ++c) {
+    const bool hint = (c & 1) != 0, skip = (c & 2) != 0, on_fused = c >= 4;
     const SE3 pose = hint ? hinted.T_world_camera : seq.frame(11).T_world_camera;
     RaycastOptions o = ro;
+    o.skip_blocks = skip || on_fused;
     if (hint) o.depth_hint = &hinted.depth;
     const RaycastResult a = raycast(cpu, camera, pose, o);
     RaycastResult b;
-    device.raycast(camera, pose, o, &b);
+    (on_fused ? fused : device).raycast(camera, pose, o, &b);
     ASSERT_EQ(b.depth.width(), camera.width);
     long both = 0, one = 0, depth_off = 0, normal_off = 0, normals = 0;
     double max_depth = 0.0;
@@ -214,9 +222,9 @@ TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
         ++normals;
         normal_off += hf_dot3(na, nb) < std::cos(0.5 * 3.14159265358979 / 180.0);
       }
-    std::printf("raycast (hint %d): %ld pixels hit on both, %ld on one, %ld depths > 0.01 voxel apart (max %.2e m), "
-                "%ld normals > 0.5 deg apart of %ld\n", int(hint), both, one, depth_off, max_depth, normal_off,
-                normals);
+    std::printf("raycast (hint %d, skip %d, %s map): %ld pixels hit on both, %ld on one, %ld depths > 0.01 voxel "
+                "apart (max %.2e m), %ld normals > 0.5 deg apart of %ld\n", int(hint), int(o.skip_blocks),
+                on_fused ? "device-fused" : "loaded", both, one, depth_off, max_depth, normal_off, normals);
     EXPECT_GT(both, long(camera.width) * camera.height / 2);
     EXPECT_EQ(b.hit_count, int(std::count_if(b.depth.data(), b.depth.data() + b.depth.width() * b.depth.height(),
                                              [](float d) { return d > 0.0f; })));
