@@ -7,7 +7,8 @@
 //                         laplace): blue (negative) - white - red (positive), saturating at the 95th percentile
 //                         of |w| over valid vertices; invalid vertices grey
 //   features.ply          areas coloured, feature vertices red
-//   control_points.json   [{name, vertex, position}] and the names not found
+//   control_points.json   [{name, vertex, position}], the names not found, and absent_areas: {area: why} for an
+//                         area the detection reports absent (an ear under hair: important_areas.h)
 //   report.json, report.md  mesh, frame, areas, thresholds, control points, warnings, stage timings
 //   features.png          front, right and left views: areas, features and control points
 //   evaluation.png        front and side views of the manual evaluation, colour-mapped
