@@ -142,8 +142,8 @@ void BM_ReadLastFrame(benchmark::State& state) {
 BENCHMARK(BM_ReadLastFrame)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(1.0);
 
 // The tracking raycast of the map of kWarmupFrames + 1 frames, from the poses of the frames after them: the CPU's
-// raycast() (skip_blocks off, no hint, no colour or shading: what the device does) against
-// DeviceVoxelGrid::raycast (its range image, march and read-back in counters).
+// raycast() (surface-free blocks skipped, no hint, no colour or shading) against DeviceVoxelGrid::raycast (its
+// range image, march and read-back in counters).
 void BM_Raycast(benchmark::State& state) {
   const bool device = state.range(0) == 1;
   const auto& frames = room_frames();
@@ -158,7 +158,6 @@ void BM_Raycast(benchmark::State& state) {
     map->load(grid);
   }
   hf::fusion::RaycastOptions options;
-  options.skip_blocks = false;
   options.shade = false;
   options.color = false;
   hf::fusion::RaycastResult out;
