@@ -85,6 +85,10 @@ class Buckets {
 // at least kEarMinSpanRho rho (an ear is ~6 cm = 2.7 rho tall); else the side has no ear (covered by hair, not
 // scanned) and says so. The ear area is the area mask and the flap within 1.5 rho of the flap's centroid,
 // connected to the flap.
+// kEarMinSpanRho: chosen on the four source heads of ../shared/data/head_meshes (the ears' flaps span 1.78-2.79
+// rho, Igea's hair-covered sides hold no flap vertex at all); on heads fused at 2-4 mm voxels the TSDF thickens
+// the pinna and its flaps span 0.36-0.95 rho, so fused ears are reported absent (bench/results/head.md: at 0.4
+// rho one fused ear landed on another piece, 17.6 voxels off).
 constexpr double kEarMinSpanRho = 1.0;
 
 void find_ears(const std::vector<Eigen::Vector3d>& ph, const std::vector<Eigen::Vector3d>& nh,
@@ -135,10 +139,11 @@ void find_ears(const std::vector<Eigen::Vector3d>& ph, const std::vector<Eigen::
     }
     span_rho[side] = span / rho;
     if (!best || span < kEarMinSpanRho * rho) {
-      char buf[200];
+      char buf[256];
       std::snprintf(buf, sizeof buf,
                     "no ear-like flap on the %s side of the head (largest thin-sheet piece spans %.2f rho, an ear "
-                    "needs %.1f): hair or a missing scan; its control points are absent",
+                    "needs %.1f): hair, a missing scan, or a pinna fused too thick to be a sheet; its control points are "
+                    "absent",
                     side == 0 ? "right" : "left", span / rho, kEarMinSpanRho);
       note[static_cast<int>(ear)] = buf;
       continue;
