@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <random>
 #include <string>
@@ -362,6 +363,36 @@ TEST(DeviceFramePyramid, MatchesTheCpuPyramid) {
   holes.fill_holes_levels = 2;
   EXPECT_THROW(device.build(f.depth, &f.color, seq.camera(), holes), Error);
   EXPECT_THROW(device.build(f.depth, &f.color, seq.camera().scaled(1)), Error);
+}
+
+// sdf on the device meets the inputs that leave its map or its frame empty (no valid depth, one valid pixel, as
+// either frame) with the cpu backend's status and pose: an empty map is a flat table of empty entries, not a
+// zero-sized buffer, and a frame without rows reduces to nothing on both.
+TEST(OpenClBackend, SdfOnEmptyInputGivesTheCpuOutcome) {
+  HF_SKIP_WITHOUT_OPENCL();
+  const FramePair& pair = room_pair();
+  const PinholeCamera cam = pair.cur.levels[0].camera;
+  const SE3 guess = SE3::exp((Vector6d() << 0.01, 0.0, 0.0, 0.02, 0.0, 0.0).finished());
+  FramePyramidOptions po;
+  po.levels = 2;
+  for (const int valid : {0, 1}) {
+    DepthImage depth(cam.width, cam.height, std::numeric_limits<float>::quiet_NaN());
+    for (int i = 0; i < valid; ++i) depth(cam.width / 2, cam.height / 2) = 1.5f;
+    const FramePyramid empty = build_frame_pyramid(depth, nullptr, cam, po);
+    for (const bool empty_is_current : {true, false}) {
+      RegistrationResult r[2];
+      for (int b = 0; b < 2; ++b) {
+        auto reg =
+            make_registration("sdf", default_registration_options("sdf"), make_backend(b == 0 ? "cpu" : "opencl"));
+        r[b] = empty_is_current ? reg->align(empty, pair.ref, guess) : reg->align(pair.cur, empty, guess);
+        test::expect_finite(r[b]);
+      }
+      const std::string label = "valid " + std::to_string(valid) + (empty_is_current ? " current" : " reference");
+      EXPECT_EQ(r[1].status, r[0].status) << label << ": " << r[1].message;
+      EXPECT_NE(r[1].status, RegistrationStatus::good) << label;
+      EXPECT_LT(test::translation_error_m(r[1].T_ref_cur, r[0].T_ref_cur), 1e-9) << label;
+    }
+  }
 }
 
 TEST(OpenClBackend, MapsAMethodDoesNotReadMayBeNull) {
