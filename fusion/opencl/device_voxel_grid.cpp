@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "fusion/kernels/block_hash.h"
+#include "fusion/kernels/raycast_kernels.h"
 #include "registration/opencl/opencl_context.h"
 
 namespace hf::opencl {
@@ -489,7 +490,10 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
   ensure_image(&out->normals, W, H);
   ensure_image(&out->color, W, H);
   std::fill(out->color.data(), out->color.data() + n_pixels, Rgb8{});
-  out->shaded = ColorImage();
+  if (options.shade)
+    ensure_image(&out->shaded, W, H);
+  else
+    out->shaded = ColorImage();
   try {
     const cl::Context& c = m.ctx->context();
     cl::CommandQueue& q = m.ctx->queue();
@@ -575,6 +579,28 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
     q.enqueueReadBuffer(m.rc_hits, CL_TRUE, 0, sizeof(hits), &hits);
     m.rc_times.read_ms = ms_since(t2);
     out->hit_count = int(hits);
+    if (options.shade) {
+      // raycast.cpp's pixel write of the shading, on the host from the read-back normals: the same ray
+      // direction (PinholeCamera's doubles, then float) and hf_headlight_shade.
+      for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+          Rgb8& g = out->shaded(x, y);
+          if (out->depth(x, y) <= 0.0f) {
+            g = Rgb8{};
+            continue;
+          }
+          const hf_float4 n = out->normals(x, y);
+          if (n.w == 0.0f) {
+            g = Rgb8{40, 40, 40};
+            continue;
+          }
+          const Eigen::Vector3f d(float((x - camera.cx) / camera.fx), float((y - camera.cy) / camera.fy), 1.0f);
+          const float len = d.norm();
+          const hf_float4 to_cam = hf_make_float4(-d.x() / len, -d.y() / len, -1.0f / len, 0.0f);
+          const auto v = std::uint8_t(255.0f * hf_headlight_shade(n, to_cam) + 0.5f);
+          g = Rgb8{v, v, v};
+        }
+    }
   } catch (const Error&) {
     throw;
   } catch (...) {

@@ -96,8 +96,8 @@ class DeviceVoxelGrid {
   // The tracking raycast of fusion/raycast.h on the device map (fusion/opencl/raycast.cl: the range image, the
   // march with cheap steps and missing-block jumps, the search around options.depth_hint first, the refined
   // crossing, the normal; the samples from the shared kernel headers): depth, vertices and normals in the camera
-  // frame into *out (images resized as raycast() does), colour black, no shading (options.color and shade are not
-  // used); with options.skip_blocks surface-free blocks are crossed in one step (the flags integrate() keeps on the
+  // frame into *out (images resized as raycast() does), the head-light shading with options.shade (from the normals,
+  // on the host), colour black (options.color is not used); with options.skip_blocks surface-free blocks are crossed in one step (the flags integrate() keeps on the
   // device and load() copies). It agrees with raycast() except where two sampling patterns of one field differ,
   // at silhouettes and the fringe of the observed volume (the CPU also jumps empty regions; tests/fusion/opencl). Throws hf::Error as raycast() does for bad options, a
   // bad camera or pose, and for OpenCL failures. last_raycast_ms: the range image and the march, each to its end.

@@ -183,7 +183,6 @@ TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
     fused.integrate(f.depth, f.color, camera, f.T_world_camera);
   }
   RaycastOptions ro;
-  ro.shade = false;
   ro.color = false;
   // Cast from an unfused pose without a hint, and from a fused frame's pose with its depth as the hint (the
   // pipeline's tracking raycast: each ray searches around the measured depth first); surface-free blocks walked
@@ -199,7 +198,8 @@ TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
     RaycastResult b;
     (on_fused ? fused : device).raycast(camera, pose, o, &b);
     ASSERT_EQ(b.depth.width(), camera.width);
-    long both = 0, one = 0, depth_off = 0, normal_off = 0, normals = 0;
+    ASSERT_EQ(b.shaded.width(), camera.width);
+    long both = 0, one = 0, depth_off = 0, normal_off = 0, normals = 0, shade_off = 0;
     double max_depth = 0.0;
     for (int y = 0; y < camera.height; ++y)
       for (int x = 0; x < camera.width; ++x) {
@@ -215,6 +215,7 @@ TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
         depth_off += dd > 1e-4;  // 0.01 voxel
         const hf_float4 na = a.normals(x, y), nb = b.normals(x, y);
         EXPECT_EQ(b.vertices(x, y).w, 1.0f);
+        shade_off += std::abs(int(a.shaded(x, y).r) - int(b.shaded(x, y).r)) > 1;  // grey levels
         if (na.w == 0.0f || nb.w == 0.0f) {
           normal_off += na.w != nb.w;
           continue;
@@ -231,6 +232,7 @@ TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
     EXPECT_LE(one, long(camera.width) * camera.height / 200);
     EXPECT_LE(depth_off, both / 200);
     EXPECT_LE(normal_off, both / 200);
+    EXPECT_LE(shade_off, both / 200);
   }
   const SE3 pose = seq.frame(11).T_world_camera;
   RaycastResult b;
