@@ -65,10 +65,11 @@ struct DeviceVoxelGrid::Impl {
   DeviceGridOptions options;
   bool fp64 = false;
   cl::Kernel band_ends, bands, find, create, block_frames, incidence, update, gather;
-  cl::Kernel clear_range, range, march, surface_free;
+  cl::Kernel clear_range, range, regions, march, surface_free;
   cl::Buffer flags;  // per pool slot: VoxelBlockGrid::surface_free (uint 0/1), for the raycast's block skip
   // The raycast's buffers, per image size (mutable: raycast() is const on the map).
   cl::Buffer rc_constants, rc_near, rc_far, rc_depth, rc_vertices, rc_normals, rc_hits, rc_hints;
+  cl::Buffer rc_regions;  // the region occupancy set, `entries` slots
   size_t rc_pixels = 0, rc_tiles = 0;
   DeviceVoxelGrid::RaycastTimes rc_times;
   size_t entries = 0;
@@ -169,6 +170,7 @@ DeviceVoxelGrid::DeviceVoxelGrid(const VolumeParams& params, std::shared_ptr<ope
     m.clear_range = cl::Kernel(program, "hf_raycast_clear_range");
     m.range = cl::Kernel(program, "hf_raycast_range");
     m.march = cl::Kernel(program, "hf_raycast_march");
+    m.regions = cl::Kernel(program, "hf_raycast_regions");
     m.surface_free = cl::Kernel(program, "hf_fusion_surface_free");
     const cl::Context& c = m.ctx->context();
     m.table = cl::Buffer(c, CL_MEM_READ_WRITE, m.entries * sizeof(Entry));
@@ -180,6 +182,7 @@ DeviceVoxelGrid::DeviceVoxelGrid(const VolumeParams& params, std::shared_ptr<ope
     m.constants = cl::Buffer(c, CL_MEM_READ_ONLY, kFrameConstants * (m.fp64 ? sizeof(double) : sizeof(float)));
     m.rc_constants = cl::Buffer(c, CL_MEM_READ_ONLY, kFrameConstants * (m.fp64 ? sizeof(double) : sizeof(float)));
     m.rc_hits = cl::Buffer(c, CL_MEM_READ_WRITE, sizeof(cl_uint));
+    m.rc_regions = cl::Buffer(c, CL_MEM_READ_WRITE, m.entries * sizeof(cl_uint));
     m.ctx->queue().enqueueFillBuffer(m.pool, std::uint32_t(0), 0, pool_bytes);
     m.flags = cl::Buffer(c, CL_MEM_READ_WRITE, params_.capacity_blocks * sizeof(std::uint32_t));
     m.ctx->queue().enqueueFillBuffer(m.flags, std::uint32_t(0), 0, params_.capacity_blocks * sizeof(std::uint32_t));
@@ -462,9 +465,10 @@ struct RaycastParams {
   float mu_m, step_fraction, min_step_m, voxel_m, refine_tol_m, min_depth_m, max_depth_m;
   cl_int min_weight_raw;
   cl_int skip_blocks;
+  cl_uint region_mask;
   hf_intrinsics K;
 };
-static_assert(sizeof(RaycastParams) == 4 * (9 + 3 + 7 + 2) + sizeof(hf_intrinsics), "hf_raycast_params");
+static_assert(sizeof(RaycastParams) == 4 * (9 + 3 + 7 + 3) + sizeof(hf_intrinsics), "hf_raycast_params");
 
 template <class T>
 void ensure_image(Image<T>* img, int w, int h) {
@@ -535,6 +539,11 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
     enqueue_1d(q, m.clear_range, n_tiles);
     set_args(m.range, m.table, cl_uint(m.entries), m.rc_constants, W, H, TW, TH, m.rc_near, m.rc_far);
     enqueue_1d(q, m.range, m.entries);
+    // The regions that hold a block (VoxelBlockGrid::region_occupied): at most one per block, in a set of
+    // `entries` >= 2 capacity slots.
+    q.enqueueFillBuffer(m.rc_regions, cl_uint(0), 0, m.entries * sizeof(cl_uint));
+    set_args(m.regions, m.table, cl_uint(m.entries), m.rc_regions, cl_uint(m.entries - 1));
+    enqueue_1d(q, m.regions, m.entries);
     q.finish();
     const auto t1 = std::chrono::steady_clock::now();
     m.rc_times.range_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
@@ -556,15 +565,16 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
     P.max_depth_m = float(options.max_depth_m);
     P.min_weight_raw = std::max(1, int(hf_quantise_weight(std::max(0.0f, options.min_weight))));
     P.skip_blocks = options.skip_blocks ? 1 : 0;
+    P.region_mask = cl_uint(m.entries - 1);
     P.K = camera.kernel_intrinsics();
     const cl_uint zero = 0;
     q.enqueueWriteBuffer(m.rc_hits, CL_FALSE, 0, sizeof(zero), &zero);
     const bool has_hints = options.depth_hint != nullptr;
     if (has_hints) q.enqueueWriteBuffer(m.rc_hints, CL_FALSE, 0, n_pixels * sizeof(float), options.depth_hint->data());
-    set_args(m.march, m.table, cl_uint(m.entries - 1), m.shift, m.options.max_probe, m.pool, m.flags, m.rc_near,
-             m.rc_far, TW, m.rc_constants);
-    m.march.setArg(10, sizeof(P), &P);
-    set_args_from(m.march, 11, m.rc_hints, cl_int(has_hints ? 1 : 0), m.rc_depth, m.rc_vertices, m.rc_normals,
+    set_args(m.march, m.table, cl_uint(m.entries - 1), m.shift, m.options.max_probe, m.pool, m.flags, m.rc_regions,
+             m.rc_near, m.rc_far, TW, m.rc_constants);
+    m.march.setArg(11, sizeof(P), &P);
+    set_args_from(m.march, 12, m.rc_hints, cl_int(has_hints ? 1 : 0), m.rc_depth, m.rc_vertices, m.rc_normals,
                   m.rc_hits);
     // 8 x 8 work-groups: a group's rays are one range tile and read neighbouring voxels.
     q.enqueueNDRangeKernel(m.march, cl::NullRange, cl::NDRange(round_up(size_t(W), 8), round_up(size_t(H), 8)),

@@ -98,8 +98,8 @@ class DeviceVoxelGrid {
   // crossing, the normal; the samples from the shared kernel headers): depth, vertices and normals in the camera
   // frame into *out (images resized as raycast() does), the head-light shading with options.shade (from the normals,
   // on the host), colour black (options.color is not used); with options.skip_blocks surface-free blocks are crossed in one step (the flags integrate() keeps on the
-  // device and load() copies). It agrees with raycast() except where two sampling patterns of one field differ,
-  // at silhouettes and the fringe of the observed volume (the CPU also jumps empty regions; tests/fusion/opencl). Throws hf::Error as raycast() does for bad options, a
+  // device and load() copies), empty 4^3-block regions as on the CPU. It samples where raycast() does, so the two
+  // agree but for float rounding of the ray set-up (tests/fusion/opencl). Throws hf::Error as raycast() does for bad options, a
   // bad camera or pose, and for OpenCL failures. last_raycast_ms: the range image and the march, each to its end.
   void raycast(const PinholeCamera& camera, const SE3& T_world_camera, const RaycastOptions& options,
                RaycastResult* out) const;

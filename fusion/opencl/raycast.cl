@@ -2,8 +2,10 @@
 // fusion/opencl/device_voxel_grid.h. Follows integrate.cl in the fusion program (fusion/opencl/CMakeLists.txt),
 // whose HF_F_* constants layout and hf_real it uses.
 //
-// Three kernels, raycast.cpp's stages:
+// Four kernels, raycast.cpp's stages:
 //   hf_raycast_clear_range  the range image's tiles to empty (near = +inf, far = 0)
+//   hf_raycast_regions      per hash entry: its block's 4^3-block region into an occupancy set (the CPU's region
+//                           table), for the march's jumps over empty regions
 //   hf_raycast_range        per hash entry: the block's depth range, projected to the 8 x 8-pixel tiles it covers
 //                           (range_image of raycast.cpp: the block clipped against the near plane, one pixel of
 //                           slack; the same arithmetic in hf_real), merged with atomic min / max on the bits of the
@@ -15,18 +17,58 @@
 //                           and the pixel write (depth, vertex; the normal by central differences of trilinear
 //                           samples one voxel apart); the samples are fusion/kernels/tsdf_sample.h's cell gather and
 //                           raycast_kernels.h's hf_trilinear, the CPU's own interpolation.
-// Not on the device (its results therefore differ from raycast()'s only where two sampling patterns of one field
-// differ, at silhouettes and the fringe of the observed volume, as raycast()'s own skip_blocks and depth_hint
-// options do): the region jump over empty 4^3-block regions (a missing block is crossed one block at a time),
-// colour and shading. Surface-free blocks are crossed in one step when skip_blocks is set, from the flags the
-// device's integrate keeps (hf_fusion_surface_free) or load() copies. A depth hint is searched
-// first as raycast() does (march_from_hint).
+// The march samples where raycast()'s does (up to float rounding of the ray set-up): a missing block is crossed in
+// one step, or its whole 4^3-block region when that holds no block (hf_raycast_regions builds the region set per
+// raycast from the hash), surface-free blocks in one step when skip_blocks is set (the flags the device's
+// integrate keeps, hf_fusion_surface_free, or load() copies), and a depth hint is searched first
+// (march_from_hint). Not on the device: colour (shading is done on the host from the normals).
 
 #include "fusion/opencl/integrate.cl"  // hf_real, the HF_F_* constants (once per program: the embedder's rule)
 #include "fusion/kernels/raycast_kernels.h"
 #include "fusion/kernels/tsdf_sample.h"
 
 #define HF_RAYCAST_TILE 8
+// VoxelBlockGrid::kRegionShift: a region is 4^3 blocks, 32^3 voxels.
+#define HF_REGION_SHIFT 2
+
+// floor(a / n) for n > 0, without a right shift of a negative value.
+inline int hf_floor_div(int a, int n) { return a >= 0 ? a / n : -((n - 1 - a) / n); }
+
+// A region's key in the occupancy set: 10 bits per axis (regions -512 .. 511, i.e. +-164 m at 1 cm voxels) plus
+// one, so 0 marks an empty slot; 0 for a region outside that range, which then counts as occupied (no jump).
+inline uint hf_region_key(int rx, int ry, int rz) {
+  if (rx < -512 || rx > 511 || ry < -512 || ry > 511 || rz < -512 || rz > 511) return 0u;
+  return (((uint)(rx + 512) << 20) | ((uint)(ry + 512) << 10) | (uint)(rz + 512)) + 1u;
+}
+inline uint hf_region_home(uint key, uint mask) { return (key * 2654435761u) & mask; }
+
+// Per hash entry: its block's region into the occupancy set (VoxelBlockGrid::region_occupied, rebuilt per raycast;
+// the set has at least twice as many slots as there are blocks, so a probe always ends).
+__kernel void hf_raycast_regions(__global const hf_block_entry* table, uint entries, volatile __global uint* regions,
+                                 uint region_mask) {
+  const uint e = (uint)get_global_id(0);
+  if (e >= entries) return;
+  const hf_block_entry entry = table[e];
+  if (entry.value == 0u) return;
+  const int n = 1 << HF_REGION_SHIFT;
+  const uint key = hf_region_key(hf_floor_div(entry.x, n), hf_floor_div(entry.y, n), hf_floor_div(entry.z, n));
+  if (key == 0u) return;
+  for (uint i = hf_region_home(key, region_mask), k = 0u; k <= region_mask; ++k, i = (i + 1u) & region_mask) {
+    const uint old = atomic_cmpxchg(&regions[i], 0u, key);
+    if (old == 0u || old == key) return;
+  }
+}
+
+inline int hf_region_occupied(__global const uint* regions, uint region_mask, int rx, int ry, int rz) {
+  const uint key = hf_region_key(rx, ry, rz);
+  if (key == 0u) return 1;
+  for (uint i = hf_region_home(key, region_mask), k = 0u; k <= region_mask; ++k, i = (i + 1u) & region_mask) {
+    const uint v = regions[i];
+    if (v == key) return 1;
+    if (v == 0u) return 0;
+  }
+  return 1;
+}
 
 __kernel void hf_raycast_clear_range(__global uint* near_bits, __global uint* far_bits, uint n) {
   const uint i = (uint)get_global_id(0);
@@ -103,6 +145,7 @@ typedef struct {
   float mu_m, step_fraction, min_step_m, voxel_m, refine_tol_m, min_depth_m, max_depth_m;
   int min_weight_raw;
   int skip_blocks;    // RaycastOptions::skip_blocks: cross surface-free blocks in one step
+  uint region_mask;   // the region occupancy set's size - 1
   hf_intrinsics K;
 } hf_raycast_params;
 
@@ -148,14 +191,15 @@ inline float hf_raycast_refine(const hf_flat_map* map, const hf_raycast_params* 
   return tc;
 }
 
-// Where the ray leaves the block holding voxel (i, j, k) (raycast.cpp's exit_of at block size).
-inline float hf_raycast_block_exit(const float* o, const float* d, int i, int j, int k) {
+// Where the ray leaves the cube of `size` voxels (aligned to multiples of it) holding voxel (i, j, k): raycast.cpp's
+// exit_of (a block: 8, a region: 32).
+inline float hf_raycast_cube_exit(const float* o, const float* d, int i, int j, int k, int size) {
   const int v[3] = {i, j, k};
   float t_exit = INFINITY;
   for (int a = 0; a < 3; ++a) {
     if (d[a] == 0.0f) continue;
-    const float lo = (float)(hf_block_of_voxel(v[a]) * HF_BLOCK_SIZE) - 0.5f;
-    const float plane = d[a] > 0.0f ? lo + (float)HF_BLOCK_SIZE : lo;
+    const float lo = (float)(hf_floor_div(v[a], size) * size) - 0.5f;
+    const float plane = d[a] > 0.0f ? lo + (float)size : lo;
     const float t = (plane - o[a]) * (1.0f / d[a]);
     t_exit = t < t_exit ? t : t_exit;
   }
@@ -163,8 +207,9 @@ inline float hf_raycast_block_exit(const float* o, const float* d, int i, int j,
 }
 
 // raycast.cpp's march() without the region jump and the surface-free skip: 1 and *t_hit at a crossing.
-inline int hf_raycast_ray(const hf_flat_map* map, __global const uint* surface_free, const hf_raycast_params* P,
-                          const float* o, const float* d, float t_min, float t_max, float* t_hit) {
+inline int hf_raycast_ray(const hf_flat_map* map, __global const uint* surface_free, __global const uint* regions,
+                          const hf_raycast_params* P, const float* o, const float* d, float t_min, float t_max,
+                          float* t_hit) {
   const float far_sdf = 0.5f;
   const float far_margin_m = 0.8660254f * P->voxel_m;
   const int cheap_steps = far_sdf * P->mu_m - far_margin_m > P->min_step_m;
@@ -184,7 +229,11 @@ inline int hf_raycast_ray(const hf_flat_map* map, __global const uint* surface_f
     const int bx = hf_block_of_voxel(n[0]), by = hf_block_of_voxel(n[1]), bz = hf_block_of_voxel(n[2]);
     const int e = hf_block_find(map->table, map->mask, map->shift, map->max_probe, bx, by, bz);
     if (e < 0) {
-      const float exit = hf_raycast_block_exit(o, d, n[0], n[1], n[2]);
+      // Jump to where the ray leaves this block, or its whole region when that holds no block at all.
+      const int region = HF_BLOCK_SIZE << HF_REGION_SHIFT;
+      const int empty = !hf_region_occupied(regions, P->region_mask, hf_floor_div(n[0], region),
+                                            hf_floor_div(n[1], region), hf_floor_div(n[2], region));
+      const float exit = hf_raycast_cube_exit(o, d, n[0], n[1], n[2], empty ? region : HF_BLOCK_SIZE);
       t = (exit > t ? exit : t) + skip_eps;
       have_prev = 0;
       continue;
@@ -195,7 +244,7 @@ inline int hf_raycast_ray(const hf_flat_map* map, __global const uint* surface_f
       // voxel along its faces shows as a negative sample right after and sends the ray back here.
       have_prev = 1, prev_exact = 0;
       t_prev = t, s_prev = 1.0f;
-      const float exit = hf_raycast_block_exit(o, d, n[0], n[1], n[2]);
+      const float exit = hf_raycast_cube_exit(o, d, n[0], n[1], n[2], HF_BLOCK_SIZE);
       t = (exit > t ? exit : t) + skip_eps;
       continue;
     }
@@ -246,13 +295,13 @@ inline int hf_raycast_ray(const hf_flat_map* map, __global const uint* surface_f
 // raycast.cpp's march_from_hint(): from the sample at the hinted t, forward when in front of the surface, else
 // back towards the camera with SDF-bounded steps until a sample turns positive.
 inline int hf_raycast_from_hint(const hf_flat_map* map, __global const uint* surface_free,
-                                const hf_raycast_params* P, const float* o, const float* d, float t_hint, float t_min,
-                                float t_max, float* t_hit) {
+                                __global const uint* regions, const hf_raycast_params* P, const float* o,
+                                const float* d, float t_hint, float t_min, float t_max, float* t_hit) {
   float sb = 0.0f;
   if (!hf_raycast_sample(map, P->min_weight_raw, o[0] + t_hint * d[0], o[1] + t_hint * d[1], o[2] + t_hint * d[2],
                          &sb))
     return 0;
-  if (sb >= 0.0f) return hf_raycast_ray(map, surface_free, P, o, d, t_hint, t_max, t_hit);
+  if (sb >= 0.0f) return hf_raycast_ray(map, surface_free, regions, P, o, d, t_hint, t_max, t_hit);
   for (float tb = t_hint;;) {
     const float ta = tb - hf_raycast_step(sb, P->mu_m, P->step_fraction, P->min_step_m);
     float sa = 0.0f;
@@ -291,7 +340,7 @@ inline hf_float4 hf_raycast_normal(const hf_flat_map* map, int min_weight_raw, c
 
 __kernel void hf_raycast_march(__global const hf_block_entry* table, uint mask, int shift, int max_probe,
                                __global const hf_voxel* pool, __global const uint* surface_free,
-                               __global const float* near_m,
+                               __global const uint* regions, __global const float* near_m,
                                __global const float* far_m, int tiles_x, __global const hf_real* f,
                                hf_raycast_params P, __global const float* hints, int has_hints,
                                __global float* depth, __global float4* vertices, __global float4* normals,
@@ -321,13 +370,13 @@ __kernel void hf_raycast_march(__global const hf_block_entry* table, uint mask, 
     // RayCaster::cast: the bracket around the depth the frame measured first.
     const float w = hf_raycast_hint_halfwidth(hint, P.mu_m, P.voxel_m);
     const float h0 = max(P.min_depth_m, hint - w), h1 = min(P.max_depth_m, hint + w);
-    hit = h0 <= hint && hint <= h1 && hf_raycast_from_hint(&map, surface_free, &P, P.o_vox, d, hint * len, h0 * len,
-                                                                   h1 * len, &t);
+    hit = h0 <= hint && hint <= h1 && hf_raycast_from_hint(&map, surface_free, regions, &P, P.o_vox, d, hint * len,
+                                                                   h0 * len, h1 * len, &t);
   }
   const int tile = (y / HF_RAYCAST_TILE) * tiles_x + x / HF_RAYCAST_TILE;
   const float z0 = max(P.min_depth_m, near_m[tile] - P.voxel_m);
   const float z1 = min(P.max_depth_m, far_m[tile] + P.voxel_m);
-  if (!hit) hit = z0 < z1 && hf_raycast_ray(&map, surface_free, &P, P.o_vox, d, z0 * len, z1 * len, &t);
+  if (!hit) hit = z0 < z1 && hf_raycast_ray(&map, surface_free, regions, &P, P.o_vox, d, z0 * len, z1 * len, &t);
   if (hit) {
     const float z = t / len;
     depth[pixel] = z;
