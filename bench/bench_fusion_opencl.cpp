@@ -12,6 +12,7 @@
 //   BM_ReadLastFrame            read_last_frame_into: what the pipeline's host copy of the map costs per frame
 //   BM_Raycast/<0 cpu|1 dev>    the tracking raycast of the fused map from the next frames' poses, raycast() against
 //                               DeviceVoxelGrid::raycast (range_ms, march_ms, read_ms: its stages)
+//   BM_FlattenMap               fusion::flatten of the room's map: sdf's per-call copy on a device backend
 //   BM_FramePyramid/<0 cpu|1 dev> the pipeline's tracking pyramid of one frame: build_frame_pyramid against
 //                               DeviceFramePyramid (upload, kernels, read-back)
 //   BM_Pipeline/<0 cpu|1 opencl> whole slam::Pipeline frames (combined registration) per backend: ms per stage
@@ -27,6 +28,7 @@
 
 #include "bench/room_frames.h"
 #include "datasets/synthetic_sequence.h"
+#include "fusion/flat_block_map.h"
 #include "fusion/integrate.h"
 #include "fusion/raycast.h"
 #include "fusion/opencl/device_voxel_grid.h"
@@ -190,6 +192,23 @@ BENCHMARK(BM_Raycast)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(kFrames - kWarmupFrames - 1);
+
+// What sdf on a device backend pays per registration call in the pipeline (registration/sdf.h): the host map in
+// the device's flat layout (fusion::flatten), here the map of all kFrames frames.
+void BM_FlattenMap(benchmark::State& state) {
+  const auto& frames = room_frames();
+  hf::fusion::VoxelBlockGrid grid(volume_1cm());
+  for (const auto& f : frames) hf::fusion::integrate(grid, f.depth, f.color, room_camera(), f.T_world_camera);
+  size_t blocks = 0;
+  for (auto _ : state) {
+    const hf::fusion::FlatBlockMap flat = hf::fusion::flatten(grid);
+    blocks = flat.blocks;
+    benchmark::DoNotOptimize(flat.pool.data());
+  }
+  state.counters["blocks"] = double(blocks);
+  state.counters["MiB"] = double(blocks) * sizeof(hf::fusion::VoxelBlock) / (1024.0 * 1024.0);
+}
+BENCHMARK(BM_FlattenMap)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(1.0);
 
 // The tracking pyramid of one 640x480 frame as the pipeline builds it (from 320x240: first_level 1, 3 levels,
 // bilateral filter, colour): build_frame_pyramid against DeviceFramePyramid (upload, kernels, read-back).
