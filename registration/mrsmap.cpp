@@ -3,7 +3,6 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numbers>
 
 #include "registration/gauss_newton.h"
@@ -81,8 +80,8 @@ std::vector<SurfelLevel> surfel_map(const NdtSamples& s, const MrsmapOptions& o)
   return map;
 }
 
-// For each level (coarsest first), each current surfel moved by T against the nearest reference surfel of the 27
-// cells around it whose descriptor is close enough.
+// For each level (coarsest first), each current surfel moved by T against every reference surfel of the 7 cells
+// around it (its cell and its face neighbours: ndt-d2d's association) whose descriptor is close enough.
 std::vector<NdtLevel> surfel_levels(const std::vector<SurfelLevel>& cur, const std::vector<SurfelLevel>& ref,
                                     double max_descriptor_distance) {
   std::vector<NdtLevel> levels;
@@ -96,20 +95,12 @@ std::vector<NdtLevel> surfel_levels(const std::vector<SurfelLevel>& cur, const s
       const NdtCell* ref_cells = r.grid.cells().data();
       for (size_t i = 0; i < c.grid.cells().size(); ++i) {
         const NdtCell& s = c.grid.cells()[i];
-        const Eigen::Vector3d x = R * s.mean + T.translation();
-        r.grid.neighbourhood(x, 27, &candidates);
-        const NdtCell* best = nullptr;
-        double best_d2 = std::numeric_limits<double>::infinity();
+        r.grid.neighbourhood(R * s.mean + T.translation(), 7, &candidates);
         for (const NdtCell* m : candidates) {
           if ((c.descriptors[i] - r.descriptors[size_t(m - ref_cells)]).norm() > max_descriptor_distance) continue;
-          const double d2 = (x - m->mean).squaredNorm();
-          if (d2 < best_d2) {
-            best_d2 = d2;
-            best = m;
-          }
+          NdtTerm term;
+          if (distribution_term(s, *m, R, r.grid.cell_m(), &term)) terms->push_back(term);
         }
-        NdtTerm term;
-        if (best != nullptr && distribution_term(s, *best, R, r.grid.cell_m(), &term)) terms->push_back(term);
       }
     };
     levels.push_back(std::move(level));

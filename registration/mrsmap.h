@@ -2,9 +2,13 @@
 // multi-resolution cell model (registration/ndt/ndt_cells.h) in place of their octree: every cell of every
 // resolution of both frames is a surfel, a Gaussian of shape with the mean and variance of its colour, and carries
 // a shape-texture descriptor h (12 values, see surfel_descriptor) of its relations to the surfels of its 26
-// neighbour cells. A current surfel moved by T is associated with the nearest reference surfel (by mean) among
-// the 27 cells around it whose descriptor is within descriptor_max_distance (L2); the pairs are scored as in
-// D2D-NDT (eq. 74-75: x' = T mu_cur - mu_ref, C = R Sigma_cur R^T + Sigma_ref). Optimisation as the report
+// neighbour cells. The score is D2D-NDT's (eq. 74-75: x' = T mu_cur - mu_ref, C = R Sigma_cur R^T + Sigma_ref)
+// with its association (a current surfel moved by T against every reference surfel of the 7 cells around it: its
+// cell and the face neighbours) restricted, as the report describes, to pairs whose descriptors are within
+// descriptor_max_distance (L2); with the gate open it is ndt-d2d (test_registration_ndt). The nearest surfel alone
+// (by mean, among 27 cells), tried first, pulls each surfel in-plane towards one neighbour's mean, as the two
+// frames' grids cut a surface differently: 0.98 against 0.37 cm ATE over 30 frames of the room, 5.9 against 2.8
+// cm on TUM fr1/rpy 0-29 (bench/results/table1/README.md). Optimisation as the report
 // describes: Levenberg-Marquardt on the pairs' Mahalanobis distances, coarse to fine (lm_iterations per level),
 // for the coarse pose, then Newton on the D2D score from there (registration/ndt/ndt_newton.h, which also states
 // how degeneracy is judged and applies the driver's outcome rules against the initial guess).
@@ -24,13 +28,14 @@ namespace hf {
 
 struct MrsmapOptions : NdtOptions {
   // Descriptor gate (L2 over the four 3-bin histograms, each summing to 1: 0 equal, 2.83 disjoint). 1.0, chosen
-  // on the noisy room pair of tests/registration/test_accuracy.cpp: 0.5 rejects 13 % of the pairs there and leaves
-  // the weakest direction below the degeneracy threshold; 1.0 keeps 94 % (4.5 mm, 0.20 deg); no gate 99 % (4.7 mm,
-  // 0.21 deg). What it gives on the rest: bench/results/table1/README.md (mrsmap).
+  // on the noisy room pair of tests/registration/test_accuracy.cpp with the earlier nearest-surfel association:
+  // 0.5 rejected 13 % of the pairs there and left the weakest direction below the degeneracy threshold; 1.0 kept
+  // 94 % (4.5 mm, 0.20 deg); no gate 99 % (4.7 mm, 0.21 deg). With the 7-cell association it reads 3.7 mm there.
+  // What it gives on the rest: bench/results/table1/README.md (mrsmap).
   double descriptor_max_distance = 1.0;
   double luminance_step = 0.05;  // |Delta luminance| above this: darker / brighter neighbour, else similar
   int lm_iterations = 5;         // Levenberg-Marquardt iterations per resolution before Newton
-  // (NdtOptions::neighbours is not used: association always searches the 27 cells around a moved surfel.)
+  // (NdtOptions::neighbours is not used: association always searches the 7 cells around a moved surfel.)
 
   std::unique_ptr<MethodOptions> clone() const override { return std::make_unique<MrsmapOptions>(*this); }
   void visit(OptionVisitor& v) override;

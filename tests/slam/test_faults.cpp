@@ -40,9 +40,6 @@ TEST(RealFaults, CostAtMostTheFaultyFrameForEveryRegistration) {
   const std::string dir = std::string(HF_SHARED_DIR) + "/data/tum_fr1_rpy_first150";
   if (!std::filesystem::is_directory(dir)) GTEST_SKIP() << dir << " is absent (../shared/data not beside the repo)";
   for (const std::string& method : registration_names()) {
-    // mrsmap reads 5.9 cm on the clean fr1/rpy 0-29 (bench/results/table1): above this test's bound without any
-    // fault, a known accuracy gap of the method, not of its fault handling.
-    if (method == "mrsmap") continue;
     for (Fault fault : {Fault::missing, Fault::black, Fault::alien}) {
       SCOPED_TRACE(method + ", fault " + std::to_string(int(fault)));
       const std::unique_ptr<FrameSource> faulty_source = faulty(dir, fault);
