@@ -228,13 +228,24 @@ Preset make_kidnap() {
   return p;
 }
 
+// The room's orbit seen by a depth camera and a colour camera that were never calibrated against each other: the
+// colour is the colour camera's own image (a Kinect v1's colour sensor sits ~2.5 cm beside its depth sensor, with
+// a focal length of ~525 px against the depth camera's ~585 px at 640x480).
+Preset make_unregistered() {
+  Preset p = room_preset("unregistered", false);
+  p.description = "the room's orbit with colour from a camera 2.5 cm aside, focal 0.9x, unregistered to depth";
+  p.T_depth_colour = SE3(Eigen::Matrix3d::Identity(), Vector3d(0.025, 0.0, 0.0));
+  p.colour_focal_scale = 525.0 / 585.0;
+  return p;
+}
+
 using Factory = Preset (*)();
 const std::map<std::string, Factory>& factories() {
   static const std::map<std::string, Factory> table = {
       {"room", make_room},       {"wall", make_wall},   {"corridor", make_corridor},
       {"textureless", make_textureless}, {"fast", make_fast},   {"holes", make_holes},
       {"exposure", make_exposure},       {"sphere", make_sphere}, {"loop", make_loop},
-      {"kidnap", make_kidnap},
+      {"kidnap", make_kidnap},   {"unregistered", make_unregistered},
   };
   return table;
 }

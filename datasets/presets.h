@@ -20,6 +20,9 @@
 //                (loop closure).
 //   kidnap       the room's orbit until frame 75, then the camera jumps back to frame 0's viewpoint (~0.7 m and
 //                30 degrees away) and goes on: tracking cannot follow; relocalisation must find the mapped view.
+//   unregistered the room's orbit with the colour camera 2.5 cm beside the depth camera and its focal length 10 %
+//                shorter (a Kinect's 525 against 585 px), its image not registered to depth (7-Scenes): the
+//                photometric rows pull against the geometric ones, which the pipeline must notice from the data.
 //   sphere       a single textured sphere (radius 0.5 m at the origin) seen from a ring around it: fusion tests
 //                compare the reconstruction with the analytic surface (see sphere_centre/radius below).
 //
@@ -48,6 +51,14 @@ struct Preset {
   std::function<double(std::uint64_t seed, int frame)> gain;  // colour gain per frame (1 except `exposure`)
   NoiseOptions noise;                                          // the preset's sensor-noise defaults
   Lighting lighting;
+  // The colour camera, where it is not the depth camera: colour is rendered from T_world_camera * T_depth_colour
+  // with the focal lengths scaled by colour_focal_scale (same size and principal point) and handed out on the depth
+  // camera's pixel grid as it is, unregistered, as 7-Scenes ships its Kinect's colour. The identity and 1 (every
+  // preset but `unregistered`): colour registered to depth.
+  SE3 T_depth_colour;
+  double colour_focal_scale = 1.0;
+  bool colour_registered() const { return colour_focal_scale == 1.0 && T_depth_colour.translation().isZero(0.0) &&
+                                          T_depth_colour.rotation().isIdentity(0.0); }
 };
 
 // Throws hf::Error "unknown synthetic preset 'X' (known: corridor, exposure, ...)".

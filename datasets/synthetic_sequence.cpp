@@ -51,7 +51,17 @@ SyntheticFrame SyntheticSequence::frame(int i) const {
   f.depth = apply_depth_noise(view.depth, view.incidence_rad, noise_, options_.seed, std::uint64_t(i));
   f.depth_clean = view.depth;
   f.gain = preset_.gain(options_.seed, i);
-  f.color = finish_colour(view.color, f.gain, noise_.colour_sigma, options_.seed, std::uint64_t(i));
+  const ColorImageF* colour = &view.color;
+  RenderedView colour_view;
+  if (!preset_.colour_registered()) {
+    PinholeCamera colour_camera = options_.camera;
+    colour_camera.fx *= preset_.colour_focal_scale;
+    colour_camera.fy *= preset_.colour_focal_scale;
+    colour_view = render_view(preset_.scene, colour_camera, f.T_world_camera * preset_.T_depth_colour,
+                              preset_.lighting);
+    colour = &colour_view.color;
+  }
+  f.color = finish_colour(*colour, f.gain, noise_.colour_sigma, options_.seed, std::uint64_t(i));
   return f;
 }
 

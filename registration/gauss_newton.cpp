@@ -212,6 +212,8 @@ GaussNewtonRegistration::GaussNewtonRegistration(std::string name, std::unique_p
   }
 }
 
+bool GaussNewtonRegistration::reads_colour() const { return (method_->kernel().inputs & kIntensityInputs) != 0; }
+
 RegistrationResult GaussNewtonRegistration::align(const FramePyramid& current, const FramePyramid& reference,
                                                   const SE3& T_ref_cur_initial) {
   const GaussNewtonOptions& o = options_.driver;
@@ -363,7 +365,10 @@ RegistrationResult GaussNewtonRegistration::align_impl(const FramePyramid& curre
   }
   classify_outcome(o, last, final_step, rows_possible, T_initial, T, last_step, result);
   for (size_t t = 0; t < last_terms.size(); ++t) {
-    result.terms.push_back({term_names[t], last_terms[t].JtJ, last_terms[t].count});
+    const NormalEquations& ne = last_terms[t];
+    const GaussNewtonStep own = solve_balanced_step(ne, unit_scale, o.degeneracy_threshold);
+    result.terms.push_back({term_names[t], ne.JtJ, ne.count, ne.Jtr, ne.cost,
+                            own.finite ? own.xi : Vector6d::Zero()});
   }
   return result;
 }

@@ -72,6 +72,7 @@ class GaussNewtonRegistration : public Registration {
   std::string name() const override { return name_; }
   const RegistrationOptions& options() const override { return options_; }
   bool aligns_to_volume() const override { return method_->aligns_to_volume(); }
+  bool reads_colour() const override;
   void set_volume(const fusion::VoxelBlockGrid* grid, const SE3& T_world_ref) override {
     method_->set_volume(grid, T_world_ref);
   }

@@ -190,7 +190,7 @@ RegistrationOptions defaults() {
 }
 
 std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
-  return make_ndt_registration("mrsmap", options, solve);
+  return make_ndt_registration("mrsmap", options, solve, /*reads_colour=*/true);
 }
 
 }  // namespace

@@ -225,7 +225,7 @@ RegistrationOptions defaults() {
 }
 
 std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
-  return make_ndt_registration("ndt-color", options, solve);
+  return make_ndt_registration("ndt-color", options, solve, /*reads_colour=*/true);
 }
 
 }  // namespace

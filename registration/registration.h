@@ -212,11 +212,17 @@ struct RegistrationResult {
   // For a method whose rows are separate terms (combined: "icp" then "photometric"; DenseMethod::term_names), each
   // term's own J^T W J at the solution (finest level, its term weight included, before the per-direction
   // weighting; same units as `information`) and its rows. Two terms that are each well constrained but pull apart
-  // (colour not registered to depth) show as a large cost with both informations strong. Empty otherwise.
+  // (colour not registered to depth) show as a large cost with both informations strong, and as steps that point
+  // apart (slam/colour_check.h reads them). Empty otherwise.
   struct Term {
     std::string name;
     Matrix6d information = Matrix6d::Zero();
     long rows = 0;
+    Vector6d gradient = Vector6d::Zero();  // J^T W r of the term at the solution (same evaluation as information)
+    double cost = 0.0;                     // its sum of w r^2 there (term weight included, as information)
+    // The Gauss-Newton step this term alone would take from the solution, -information^-1 gradient, xi = (omega, v)
+    // order; its directions below the driver's degeneracy threshold (balanced units) left at 0.
+    Vector6d step = Vector6d::Zero();
   };
   std::vector<Term> terms;
 
@@ -235,6 +241,11 @@ class Registration {
                                    const SE3& T_ref_cur_initial) = 0;
   virtual std::string name() const = 0;
   virtual const RegistrationOptions& options() const = 0;
+
+  // Whether align() reads the frames' intensity (photometric rows, colour distributions, features on the image):
+  // a pipeline whose colour turns out not to be registered to its depth (slam/colour_check.h) replaces such a
+  // method by a depth-only one.
+  virtual bool reads_colour() const { return false; }
 
   // A method that can align to the map itself (sdf: the TSDF) says so here; set_volume() then hands it the map
   // and the pose of the reference camera in it (T_ref_cur stays relative to that camera), and align() neither

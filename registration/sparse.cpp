@@ -48,6 +48,7 @@ Vector6d feature_units(const FeatureFrame& current) {
 
 class SparseRegistration final : public Registration {
  public:
+  bool reads_colour() const override { return true; }  // ORB on the intensity
   explicit SparseRegistration(const RegistrationOptions& options) : options_(options) {
     options_.validate();
     features_ = options_.method_as<SparseOptions>().features;

@@ -133,7 +133,8 @@ struct Pipeline::Verdict {
 Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
     : config_(config), camera_(camera), tracking_camera_(camera.scaled(config.tracking_level)),
       grid_((config.validate(), config.volume)),
-      reference_(std::make_unique<Reference>()), keyframes_(config.keyframes), fused_(config.reintegration) {
+      colour_check_(config.colour_check), reference_(std::make_unique<Reference>()), keyframes_(config.keyframes),
+      fused_(config.reintegration) {
 #ifdef HF_HAVE_FUSION_OPENCL
   if (config_.backend == "opencl" && config_.stream_radius_m <= 0)
     device_map_ = std::make_unique<fusion::DeviceVoxelGrid>(config_.volume);
@@ -217,6 +218,7 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
   const bool fuse = v.action == Verdict::integrate &&
                     (config_.integrate_poor || !r.registration || r.registration->status != RegistrationStatus::poor);
   if (fuse) integrate(frame, v.T_world_cur, &r);
+  check_colour(current, &r);  // before the raycast takes the frame's intensity for the next reference
   raycast_reference(current, v.T_world_cur, r.integrated, &r);
   // After a loss or a relocalisation the motion spans several frames: no prior for the next one, not a wrong one.
   velocity_ = (lost_spell_ > 0 || v.state == TrackState::relocalised) ? SE3() : T_prev.inverse() * v.T_world_cur;
@@ -228,6 +230,24 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
   reintegrate(&r);
   record_anchor(r);
   return r;
+}
+
+// Every frame_step-th integrated frame while undecided, as long as the primary reads colour. Once the colour is
+// judged unregistered, the depth-only method tracks from the next frame on (and registers keyframe pairs); a
+// fallback of the same name would only repeat it.
+void Pipeline::check_colour(const FramePyramid& current, FrameResult* r) {
+  if (!registration_ || !registration_->reads_colour() || !r->integrated || current.levels.empty() ||
+      !colour_check_.wants(r->index))
+    return;
+  const auto t0 = std::chrono::steady_clock::now();
+  r->colour_alignment = estimate_colour_alignment(current.levels[0], config_.colour_check);
+  const bool decided = colour_check_.add(*r->colour_alignment, r->index);
+  r->ms.track += ms_since(t0);
+  if (!decided || colour_check_.verdict() != ColourVerdict::unregistered) return;
+  RegistrationOptions o = pipeline_registration_options(config_.colour_check.depth_only_registration);
+  o.driver.iterations = registration_->options().driver.iterations;
+  registration_ = make_registration(config_.colour_check.depth_only_registration, o, make_backend(config_.backend));
+  if (fallback_ && fallback_->name() == registration_->name()) fallback_.reset();
 }
 
 FramePyramid Pipeline::preprocess(const RgbdFrame& frame, FrameResult* r) const {
@@ -279,8 +299,9 @@ Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_
                           d.angle_rad() * 180.0 / M_PI > config_.seed_min_motion_deg))
       guess = seed.T_ref_cur;
   }
-  Verdict primary = decide(align_to_model(*registration_, current, guess), current, timestamp_s,
-                           config_.registration);
+  const RegistrationResult primary_result = align_to_model(*registration_, current, guess);
+  r->term_disagreement = term_disagreement(primary_result);
+  Verdict primary = decide(primary_result, current, timestamp_s, registration_->name());
   if (primary.action == Verdict::integrate || !fallback_) {
     r->ms.track = ms_since(t0);
     return primary;
@@ -289,7 +310,7 @@ Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_
                             config_.fallback_registration);
   r->ms.track = ms_since(t0);
   if (fallback.action == Verdict::integrate) {
-    fallback.why = config_.registration + " rejected (" + primary.why + "); " + config_.fallback_registration +
+    fallback.why = registration_->name() + " rejected (" + primary.why + "); " + config_.fallback_registration +
                    " accepted";
     return fallback;
   }

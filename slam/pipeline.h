@@ -14,6 +14,9 @@
 //                that fails or disagrees with the map, fallback_registration (icp) is tried against the same model.
 //                With seed_registration set (sparse), it runs first and its estimate becomes the initial guess
 //                where it disagrees with the motion prior (large motion).
+//                While the primary reads colour, every few frames the colour is checked against the depth
+//                (slam/colour_check.h, timed into `track`); once it is judged not registered to the depth,
+//                colour_check.depth_only_registration tracks from the next frame on.
 //   decide       the verdict (Verdict) from the registration results, computed before any state changes:
 //                integrate, odometry or lose (the failure policy below).
 //   relocalise   only for a frame the verdict loses, once keyframes exist: the frame is registered against the
@@ -125,6 +128,11 @@ struct FrameResult {
   std::string method;        // the registration that placed the frame (primary, fallback, or "relocalisation")
   std::optional<RegistrationResult> registration;  // the one that placed (or failed to place) the frame
   std::string message;       // why the frame was lost (one line), empty otherwise
+  // The primary registration's two terms' disagreement (slam/colour_check.h); valid only when it has an icp and
+  // a photometric term.
+  TermDisagreement term_disagreement;
+  // The colour-to-depth alignment estimated on this frame for the colour check (frames it sampled only).
+  std::optional<ColourAlignment> colour_alignment;
   StageMs ms;                // `read` is left for the caller
 };
 
@@ -150,6 +158,10 @@ class Pipeline {
   const KeyframeMap& keyframes() const { return keyframes_; }
   const std::vector<LoopEdge>& loops() const { return loops_; }
   size_t loops_closed() const { return loops_closed_; }
+  // Whether the colour is registered to the depth, as judged so far, and the method that tracks now (the
+  // configured registration, or colour_check.depth_only_registration once the colour was judged unregistered).
+  const ColourCheck& colour_check() const { return colour_check_; }
+  std::string tracking_registration() const { return registration_ ? registration_->name() : config_.registration; }
   const FusedFrames& fused_frames() const { return fused_; }  // the last kept frame joins it with the next
 
   // Every processed frame's pose after the loop closures so far, in processing order.
@@ -189,6 +201,7 @@ class Pipeline {
   bool apply_graph(const PoseGraphOptions& options, size_t new_loops = 0);
   void reintegrate(FrameResult* r);
   void record_anchor(const FrameResult& r);
+  void check_colour(const FramePyramid& current, FrameResult* r);
   void lose(FrameResult* r, std::string why);
 
   PipelineConfig config_;
@@ -201,6 +214,7 @@ class Pipeline {
   std::unique_ptr<Registration> registration_;  // null for groundtruth
   std::unique_ptr<Registration> fallback_;      // null when none
   std::unique_ptr<Registration> seed_;          // seed_registration; null when none
+  ColourCheck colour_check_;
   std::unique_ptr<Reference> reference_;        // model maps + intensity at the last pose
   KeyframeMap keyframes_;
   std::unique_ptr<AppearanceIndex> appearance_;

@@ -174,6 +174,18 @@ void visit(V&& v, ReintegrationOptions& o) {
   v("memory_budget_mb", o.memory_budget_mb);
 }
 template <class V>
+void visit(V&& v, ColourCheckOptions& o) {
+  v("enabled", o.enabled);
+  v("window_estimates", o.window_estimates);
+  v("frame_step", o.frame_step);
+  v("max_scale_error", o.max_scale_error);
+  v("max_zoom", o.max_zoom);
+  v("max_shift_fraction", o.max_shift_fraction);
+  v("min_edge_fraction", o.min_edge_fraction);
+  v("max_chamfer_px", o.max_chamfer_px);
+  v("depth_only_registration", o.depth_only_registration);
+}
+template <class V>
 void visit_scalars(V&& v, PipelineConfig& c) {
   v("registration", c.registration);
   v("fallback_registration", c.fallback_registration);
@@ -275,6 +287,12 @@ void PipelineConfig::validate() const {
   keyframes.validate();
   loop_closure.validate();
   reintegration.validate();
+  colour_check.validate();
+  if (colour_check.enabled) {
+    const auto names = registration_names();
+    if (std::find(names.begin(), names.end(), colour_check.depth_only_registration) == names.end())
+      throw Error("unknown colour_check.depth_only_registration '" + colour_check.depth_only_registration + "'");
+  }
   if (loop_closure.graph.threads < 1 || loop_closure.graph.threads > 64)
     throw Error("loop_closure: threads must be in [1, 64]");
   if (relocalisation.candidates < 1 || relocalisation.candidates > 100)
@@ -320,6 +338,7 @@ nlohmann::json config_to_json(const PipelineConfig& config) {
   j["relocalisation"] = section_to_json(c.relocalisation);
   j["loop_closure"] = section_to_json(c.loop_closure);
   j["reintegration"] = section_to_json(c.reintegration);
+  j["colour_check"] = section_to_json(c.colour_check);
   // Always write the options in force, so a report says exactly what ran.
   RegistrationOptions r = c.registration == "groundtruth" ? RegistrationOptions{} : effective_registration_options(c);
   j["registration_options"] = section_to_json(r);
@@ -333,7 +352,8 @@ PipelineConfig config_from_json(const nlohmann::json& j, const std::string& wher
   visit_scalars(f, c);
   // The method first: the registration options start from its defaults.
   static const char* sections[] = {"volume", "integrate", "raycast", "pyramid", "registration_options",
-                                   "keyframes", "relocalisation", "loop_closure", "reintegration"};
+                                   "keyframes", "relocalisation", "loop_closure", "reintegration",
+                                   "colour_check"};
   for (auto it = j.begin(); it != j.end(); ++it) {
     const std::string& k = it.key();
     if (std::find(std::begin(sections), std::end(sections), k) != std::end(sections)) continue;
@@ -352,6 +372,7 @@ PipelineConfig config_from_json(const nlohmann::json& j, const std::string& wher
   if (j.contains("loop_closure")) section_from_json(j["loop_closure"], where + ": loop_closure", c.loop_closure);
   if (j.contains("reintegration"))
     section_from_json(j["reintegration"], where + ": reintegration", c.reintegration);
+  if (j.contains("colour_check")) section_from_json(j["colour_check"], where + ": colour_check", c.colour_check);
   if (j.contains("registration_options") && !j["registration_options"].is_null()) {
     RegistrationOptions r =
         c.registration == "groundtruth" ? RegistrationOptions{} : effective_registration_options(c);

@@ -5,8 +5,8 @@
 //   c.validate();                                // hf::Error naming the bad field
 //
 // Each nested section (volume, integrate, raycast, pyramid, registration_options, keyframes, relocalisation,
-// loop_closure) is a JSON object of the same name; an unknown key anywhere is an error naming it, so a typo never
-// silently keeps a default.
+// loop_closure, reintegration, colour_check) is a JSON object of the same name; an unknown key anywhere is an
+// error naming it, so a typo never silently keeps a default.
 #pragma once
 
 #include <nlohmann/json_fwd.hpp>
@@ -18,6 +18,7 @@
 #include "fusion/voxel_block_grid.h"
 #include "registration/frame_pyramid.h"
 #include "registration/registration.h"
+#include "slam/colour_check.h"
 #include "slam/keyframes.h"
 #include "slam/loop_closure.h"
 #include "slam/reintegration.h"
@@ -93,6 +94,10 @@ struct PipelineConfig {
   RelocalisationOptions relocalisation;
   LoopClosureOptions loop_closure;
   ReintegrationOptions reintegration;
+  // Whether the colour is registered to the depth, judged from the frames themselves (slam/colour_check.h); when
+  // it is not, tracking goes on with colour_check.depth_only_registration. Only while `registration` reads colour
+  // (Registration::reads_colour); for a depth-only method the check stays undecided.
+  ColourCheckOptions colour_check;
 
   // Throws hf::Error naming the bad field (also validates the nested option structs).
   void validate() const;

@@ -156,13 +156,26 @@ RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const Fra
   s.frames_bad = long(run.bad_frames.size());
   s.interrupted = run.interrupted;
   s.capture = source.capture_stats();
+  const ColourCheck& colour = pipeline.colour_check();
+  s.colour_verdict = to_string(colour.verdict());
+  s.tracking_registration = pipeline.tracking_registration();
+  if (colour.verdict() != ColourVerdict::undecided) {
+    s.colour_median_scale = colour.median_scale();
+    s.colour_decided_at_frame = colour.decided_at_frame();
+  }
+  // The primary of a frame: the configured method, or the depth-only one after an "unregistered" verdict.
+  const auto primary_of = [&](size_t index) {
+    return colour.verdict() == ColourVerdict::unregistered && index > colour.decided_at_frame()
+               ? s.tracking_registration
+               : s.registration;
+  };
   StageMs sum;
   long spell = 0;
   for (const auto& f : run.frames) {
     s.frames_lost += f.state == TrackState::lost;
     s.frames_odometry += f.state == TrackState::odometry;
     s.frames_relocalised += f.state == TrackState::relocalised;
-    s.frames_fallback += f.pose_valid && !f.method.empty() && f.method != s.registration &&
+    s.frames_fallback += f.pose_valid && !f.method.empty() && f.method != primary_of(f.index) &&
                          f.state != TrackState::relocalised;
     s.coverage += f.pose_valid ? 1.0 : 0.0;
     spell = f.state == TrackState::lost ? spell + 1 : 0;
@@ -251,6 +264,11 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
   j["rpe_trans_m_per_s"] = opt(s.rpe_trans_m_per_s());
   j["rpe_rot_deg_per_s"] = opt(s.rpe_rot_deg_per_s());
   j["metrics"] = s.metrics ? metrics_to_json(*s.metrics) : nlohmann::json(nullptr);
+  j["colour_check"] = {{"verdict", s.colour_verdict},
+                        {"median_scale", s.colour_median_scale},
+                        {"decided_at_frame", s.colour_decided_at_frame ? nlohmann::json(*s.colour_decided_at_frame)
+                                                                       : nlohmann::json(nullptr)},
+                        {"tracking_registration", s.tracking_registration}};
   j["fps"] = s.fps;
   j["wall_s"] = run.wall_s;
   j["ms_per_frame"] = {{"read", s.mean_ms.read},         {"preprocess", s.mean_ms.preprocess},
@@ -277,6 +295,16 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
       fj["degenerate_dims"] = f.registration->degenerate_dims;
     }
     if (!f.message.empty()) fj["message"] = f.message;
+    if (f.term_disagreement.valid)
+      fj["terms"] = {{"chi2", f.term_disagreement.chi2},
+                     {"translation_m", f.term_disagreement.translation_m},
+                     {"rotation_deg", f.term_disagreement.rotation_deg}};
+    if (f.colour_alignment)
+      fj["colour_alignment"] = {{"valid", f.colour_alignment->valid},
+                                {"scale", f.colour_alignment->scale},
+                                {"shift_px", {f.colour_alignment->shift_x_px, f.colour_alignment->shift_y_px}},
+                                {"chamfer_px", f.colour_alignment->chamfer_px},
+                                {"depth_edges", f.colour_alignment->depth_edges}};
     frames.push_back(std::move(fj));
   }
   j["per_frame"] = std::move(frames);
@@ -291,12 +319,22 @@ std::string fmt(double v, int precision) {
   return o.str();
 }
 
+std::string colour_line(const RunSummary& s) {
+  if (s.colour_verdict == "undecided") return "registration to depth undecided (the check did not run or had too few frames)";
+  std::string line = "judged " + s.colour_verdict + " to depth at frame " +
+                     std::to_string(s.colour_decided_at_frame.value_or(0)) + " (median colour / depth scale " +
+                     fmt(s.colour_median_scale, 3) + ")";
+  if (s.colour_verdict == "unregistered") line += "; tracked with " + s.tracking_registration + " from then on";
+  return line;
+}
+
 std::string report_markdown(const RunSummary& s, const SequenceRun& run, const FrameSource& source) {
   std::ostringstream md;
   md << "# hashfusion run\n\n| | |\n|---|---|\n"
      << "| input | `" << s.input << "` (" << s.source_name << ") |\n"
      << "| camera | " << source.camera().describe() << " (" << source.camera_origin() << ") |\n"
      << "| registration | " << s.registration << " (backend " << s.backend << ") |\n"
+     << "| colour | " << colour_line(s) << " |\n"
      << "| voxel | " << fmt(s.voxel_m * 1000.0, 1) << " mm |\n"
      << "| frames | " << s.frames << " processed, " << s.frames_bad << " unreadable, " << s.frames_lost << " lost, "
      << s.frames_degenerate << " degenerate, " << s.frames_poor << " poor, " << s.frames_odometry

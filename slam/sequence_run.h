@@ -85,6 +85,13 @@ struct RunSummary {
   bool interrupted = false;
   std::optional<CaptureStats> capture;       // live sources: frames in / processed / dropped and both rates
   std::optional<TrajectoryMetrics> metrics;  // ATE and RPE (1 s delta)
+  // The colour check (slam/colour_check.h): its verdict, the median colour-to-depth scale of the window that
+  // decided it, the frame it fell at, and the method that tracked at the end (colour_check.depth_only_registration
+  // after an "unregistered" verdict, else `registration`).
+  std::string colour_verdict = "undecided";
+  double colour_median_scale = 1.0;
+  std::optional<size_t> colour_decided_at_frame;
+  std::string tracking_registration;
   double fps = 0.0;             // frames / sum of per-frame stage times
   StageMs mean_ms;              // per stage, averaged over processed frames (total = their sum)
   size_t blocks_allocated = 0;  // resident + streamed-out blocks at the end

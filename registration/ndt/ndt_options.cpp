@@ -79,8 +79,8 @@ namespace {
 
 class NdtRegistration final : public Registration {
  public:
-  NdtRegistration(std::string name, const RegistrationOptions& options, NdtSolve solve)
-      : name_(std::move(name)), options_(options), solve_(solve) {
+  NdtRegistration(std::string name, const RegistrationOptions& options, NdtSolve solve, bool reads_colour)
+      : name_(std::move(name)), options_(options), solve_(solve), reads_colour_(reads_colour) {
     options_.validate();
   }
   RegistrationResult align(const FramePyramid& current, const FramePyramid& reference,
@@ -92,18 +92,20 @@ class NdtRegistration final : public Registration {
   }
   std::string name() const override { return name_; }
   const RegistrationOptions& options() const override { return options_; }
+  bool reads_colour() const override { return reads_colour_; }
 
  private:
   std::string name_;
   RegistrationOptions options_;
   NdtSolve solve_;
+  bool reads_colour_;
 };
 
 }  // namespace
 
 std::unique_ptr<Registration> make_ndt_registration(const std::string& name, const RegistrationOptions& options,
-                                                    NdtSolve solve) {
-  return std::make_unique<NdtRegistration>(name, options, solve);
+                                                    NdtSolve solve, bool reads_colour) {
+  return std::make_unique<NdtRegistration>(name, options, solve, reads_colour);
 }
 
 NdtSolveOptions ndt_solve_options(const RegistrationOptions& options, const std::vector<Eigen::Vector3d>& current,

@@ -55,8 +55,9 @@ NdtSolveOptions ndt_solve_options(const RegistrationOptions& options, const std:
 // points (solve), wrapped in ndt_align_checked. Validates the options (hf::Error).
 using NdtSolve = RegistrationResult (*)(const RegistrationOptions& options, const NdtSamples& current,
                                         const NdtSamples& reference, const SE3& T_initial);
+// reads_colour: the solve reads the samples' intensity (Registration::reads_colour).
 std::unique_ptr<Registration> make_ndt_registration(const std::string& name, const RegistrationOptions& options,
-                                                    NdtSolve solve);
+                                                    NdtSolve solve, bool reads_colour = false);
 
 // balanced_units() of a point set: S = diag(1/L x3, 1 x3), L the RMS distance of the points (>= 1 mm).
 Vector6d point_units(const std::vector<Eigen::Vector3d>& points);

@@ -115,7 +115,7 @@ TEST(Presets, UnknownNameListsTheKnownOnes) {
     EXPECT_NE(m.find("'kitchen'"), std::string::npos) << m;
     for (const auto& n : preset_names()) EXPECT_NE(m.find(n), std::string::npos) << m;
   }
-  EXPECT_EQ(preset_names().size(), 10u);
+  EXPECT_EQ(preset_names().size(), 11u);
   for (const auto& n : preset_names()) EXPECT_FALSE(make_preset(n).description.empty()) << n;
 }
 
@@ -240,6 +240,40 @@ TEST(SyntheticSource, YieldsEveryFrameWithGroundTruthThenEnd) {
   EXPECT_TRUE(is_synthetic_input("synthetic:room"));
   EXPECT_FALSE(is_synthetic_input("data/rgbd_dataset"));
   EXPECT_THROW(open_synthetic_input("synthetic:nope", o), Error);
+}
+
+
+// `unregistered`: the depth is the room's, frame for frame; the colour is the image of a camera 2.5 cm aside with a
+// 0.9x focal length, so it differs from the room's where the scene is textured, and matches what that camera sees.
+TEST(Presets, UnregisteredColourComesFromTheColourCamera) {
+  SyntheticOptions o = small("unregistered", 3);
+  o.noise_enabled = false;
+  SyntheticOptions r = o;
+  r.preset = "room";
+  const SyntheticSequence unreg(o), room(r);
+  const Preset p = make_preset("unregistered");
+  EXPECT_FALSE(p.colour_registered());
+  EXPECT_TRUE(make_preset("room").colour_registered());
+  const SyntheticFrame a = unreg.frame(2), b = room.frame(2);
+  ASSERT_EQ(a.depth.size(), b.depth.size());
+  for (size_t i = 0; i < a.depth.size(); ++i) ASSERT_EQ(a.depth.pixels()[i], b.depth.pixels()[i]) << i;
+  // What the colour camera itself renders, without noise and at gain 1: the frame's colour exactly.
+  PinholeCamera cc = o.camera;
+  cc.fx *= p.colour_focal_scale;
+  cc.fy *= p.colour_focal_scale;
+  const ColorImage expected = finish_colour(
+      render_view(p.scene, cc, a.T_world_camera * p.T_depth_colour, p.lighting).color, 1.0, 0.0, o.seed, 2);
+  ASSERT_EQ(expected.size(), a.color.size());
+  long differ_from_room = 0;
+  for (size_t i = 0; i < a.color.size(); ++i) {
+    const Rgb8& x = a.color.pixels()[i];
+    const Rgb8& y = expected.pixels()[i];
+    ASSERT_TRUE(x.r == y.r && x.g == y.g && x.b == y.b) << i;
+    const Rgb8& z = b.color.pixels()[i];
+    differ_from_room += (x.r != z.r || x.g != z.g || x.b != z.b) ? 1 : 0;
+  }
+  // Most pixels see another texel: a 10 % zoom moves everything but the centre by pixels.
+  EXPECT_GT(differ_from_room, long(a.color.size() / 2));
 }
 
 }  // namespace
