@@ -14,6 +14,7 @@
 #include "registration/pixel_selection.h"
 #ifdef HF_HAVE_FUSION_OPENCL
 #include "fusion/opencl/device_voxel_grid.h"
+#include "registration/opencl/device_pyramid.h"
 #include "registration/opencl/opencl_context.h"
 #endif
 
@@ -138,6 +139,9 @@ Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
 #ifdef HF_HAVE_FUSION_OPENCL
   if (config_.backend == "opencl" && config_.stream_radius_m <= 0)
     device_map_ = std::make_unique<fusion::DeviceVoxelGrid>(config_.volume);
+  // The frame pyramid on the device too, unless it fills holes (push-pull has no device kernel).
+  if (config_.backend == "opencl" && config_.pyramid.fill_holes_levels == 0)
+    device_pyramid_ = std::make_unique<opencl::DeviceFramePyramid>();
 #endif
   if (config_.registration == "groundtruth") return;
   RegistrationOptions options = effective_registration_options(config_);
@@ -254,7 +258,13 @@ FramePyramid Pipeline::preprocess(const RgbdFrame& frame, FrameResult* r) const 
   const auto t0 = std::chrono::steady_clock::now();
   FramePyramidOptions po = config_.pyramid;
   po.first_level = config_.tracking_level;
-  FramePyramid p = build_frame_pyramid(frame.depth, frame.color.empty() ? nullptr : &frame.color, camera_, po);
+  const ColorImage* colour = frame.color.empty() ? nullptr : &frame.color;
+#ifdef HF_HAVE_FUSION_OPENCL
+  FramePyramid p = device_pyramid_ ? device_pyramid_->build(frame.depth, colour, camera_, po)
+                                   : build_frame_pyramid(frame.depth, colour, camera_, po);
+#else
+  FramePyramid p = build_frame_pyramid(frame.depth, colour, camera_, po);
+#endif
   r->ms.preprocess = ms_since(t0);
   return p;
 }
@@ -633,7 +643,7 @@ void Pipeline::raycast_reference(FramePyramid& current, const SE3& T_world_cur, 
     fusion::raycast_sampled(grid_, tracking_camera_, T_world_cur, ro,
                             fusion::dilate_rays(rays, config_.tracking_raycast_dilate_px), &reference_->model);
   } else {
-    fusion::raycast(grid_, tracking_camera_, T_world_cur, ro, &reference_->model);
+    model_raycast(T_world_cur, ro);
   }
   reference_->T_world_model = T_world_cur;
   reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
@@ -644,9 +654,23 @@ void Pipeline::raycast_reference(FramePyramid& current, const SE3& T_world_cur, 
   r->ms.raycast = ms_since(t0);
 }
 
+// The tracking raycast into reference_->model: on the device map where there is one (DeviceVoxelGrid::raycast, the
+// same march and options; the map loaded again first when the host changed it), else on the host grid.
+void Pipeline::model_raycast(const SE3& T_world_camera, const fusion::RaycastOptions& options) {
+#ifdef HF_HAVE_FUSION_OPENCL
+  if (device_map_) {
+    if (device_map_stale_) device_map_->load(grid_);
+    device_map_stale_ = false;
+    device_map_->raycast(tracking_camera_, T_world_camera, options, &reference_->model);
+    return;
+  }
+#endif
+  fusion::raycast(grid_, tracking_camera_, T_world_camera, options, &reference_->model);
+}
+
 void Pipeline::ensure_reference_maps() {
   if (!reference_->stale) return;
-  fusion::raycast(grid_, tracking_camera_, reference_->T_world_model, config_.raycast, &reference_->model);
+  model_raycast(reference_->T_world_model, config_.raycast);
   reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
                                             tracking_camera_, config_.pyramid.levels);
   take_intensity(reference_->frame_intensity, &reference_->pyramid);
@@ -733,6 +757,9 @@ std::map<std::string, std::string> Pipeline::stage_devices() const {
                                        {"raycast", "cpu"}};
 #ifdef HF_HAVE_FUSION_OPENCL
   if (device_map_) d["integrate"] = device_map_->device_name();
+  // The tracking raycast (the sampled one, issue 19, stays on the host).
+  if (device_map_ && config_.tracking_raycast != "sampled") d["raycast"] = device_map_->device_name();
+  if (device_pyramid_) d["preprocess"] = device_pyramid_->device_name();
   if (config_.backend == "opencl" && registration_) {
     const auto context = opencl::Context::shared();  // the backends' (they hold it)
     d["registration"] = context->info().platform_name + " / " + context->info().device_name;  // the reductions

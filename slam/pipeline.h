@@ -92,6 +92,9 @@
 namespace hf::fusion {
 class DeviceVoxelGrid;  // fusion/opencl/device_voxel_grid.h
 }
+namespace hf::opencl {
+class DeviceFramePyramid;  // registration/opencl/device_pyramid.h
+}
 
 namespace hf::slam {
 
@@ -175,8 +178,10 @@ class Pipeline {
   // A shaded raycast of the model from `T_world_camera` with the pipeline's camera, for people.
   ColorImage render(const SE3& T_world_camera) const;
   // Where each stage runs (report.json "devices"): preprocess, registration, integrate, raycast -> "cpu" or the
-  // OpenCL device's "platform / device". backend = "opencl" integrates on the device (fusion/opencl) unless
-  // stream_radius_m > 0 (streaming is host-only); the host map follows the device's frame by frame.
+  // OpenCL device's "platform / device". backend = "opencl" integrates and casts the tracking raycast on the device
+  // (fusion/opencl) unless stream_radius_m > 0 (streaming is host-only; the sampled tracking raycast stays on the
+  // host too), and builds the frames' pyramids there unless the pyramid fills holes; the host map follows the
+  // device's frame by frame.
   std::map<std::string, std::string> stage_devices() const;
 
  private:
@@ -191,6 +196,7 @@ class Pipeline {
   void integrate(const RgbdFrame& frame, const SE3& T_world_cur, FrameResult* r);
   void raycast_reference(FramePyramid& current, const SE3& T_world_cur, bool integrated, FrameResult* r);
   void ensure_reference_maps();
+  void model_raycast(const SE3& T_world_camera, const fusion::RaycastOptions& options);
   RegistrationResult align_to_model(Registration& method, const FramePyramid& current, const SE3& guess);
   void keep_frame(const RgbdFrame& frame, FrameResult* r);
   void commit_pending_images();
@@ -210,6 +216,7 @@ class Pipeline {
   fusion::VoxelBlockGrid grid_;
   std::unique_ptr<fusion::DeviceVoxelGrid> device_map_;  // backend opencl: the map integrate() fuses into
   bool device_map_stale_ = false;  // grid_ changed on the host (re-fusion): load it before the next integrate
+  std::unique_ptr<opencl::DeviceFramePyramid> device_pyramid_;  // backend opencl: the frames' tracking pyramids
   fusion::BlockStore store_;
   std::unique_ptr<Registration> registration_;  // null for groundtruth
   std::unique_ptr<Registration> fallback_;      // null when none
