@@ -359,6 +359,13 @@ TEST(DeviceFramePyramid, MatchesTheCpuPyramid) {
       }
     }
   }
+  // No valid depth and no colour: empty maps, as on the CPU.
+  const DepthImage nan_depth(f.depth.width(), f.depth.height(), std::numeric_limits<float>::quiet_NaN());
+  const FramePyramid none = device.build(nan_depth, nullptr, seq.camera());
+  for (const FramePyramidLevel& level : none.levels) {
+    EXPECT_EQ(count_valid_pixels(level.vertices), 0);
+    EXPECT_FALSE(level.has_intensity());
+  }
   FramePyramidOptions holes;
   holes.fill_holes_levels = 2;
   EXPECT_THROW(device.build(f.depth, &f.color, seq.camera(), holes), Error);

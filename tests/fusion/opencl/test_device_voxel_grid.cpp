@@ -246,6 +246,13 @@ TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
   bad = ro;
   bad.depth_hint = &small;  // not the camera's size
   EXPECT_THROW(device.raycast(camera, pose, bad, &b), Error);
+  // An empty map: every pixel a miss, as on the CPU.
+  DeviceVoxelGrid empty(volume, ctx);
+  empty.raycast(camera, pose, ro, &b);
+  EXPECT_EQ(b.hit_count, 0);
+  EXPECT_EQ(std::count_if(b.depth.data(), b.depth.data() + b.depth.width() * b.depth.height(),
+                          [](float d) { return d != 0.0f; }),
+            0);
 }
 
 // InfiniTAM stops silently when its block budget is exhausted; here the frame fails with the typed error, the
