@@ -1,8 +1,9 @@
-// The voxel-block map on an OpenCL device and integrate() there (issue 20).
+// The voxel-block map on an OpenCL device, integrate() and the tracking raycast there (issue 20).
 //
 //   auto ctx = hf::opencl::Context::shared();           // registration/opencl/opencl_context.h: device choice
 //   hf::fusion::DeviceVoxelGrid map(volume, ctx);        // volume: VolumeParams (validated)
 //   map.integrate(depth, colour, camera, T_world_camera, params);  // as fusion::integrate, on the device
+//   map.raycast(camera, T_world_camera, raycast_options, &model);  // as fusion::raycast (no colour)
 //   VoxelBlockGrid grid(volume);  map.read_into(grid);   // meshing, streaming, save/load on the host
 //
 // Layout, VoxelBlockGrid's (fusion/block_hash_table.h, fusion/kernels/voxel.h): a table of
@@ -10,10 +11,11 @@
 // BlockHashTable's Fibonacci mix of the coordinates, linear probing bounded by DeviceGridOptions::max_probe; a pool
 // of capacity_blocks blocks of 512 8-byte hf_voxels (x fastest), allocated on the device up front.
 //
-// integrate() is fusion::integrate's two phases as six kernels (fusion/opencl/integrate.cl): the CPU's band and
+// integrate() is fusion::integrate's two phases as kernels (fusion/opencl/integrate.cl): the CPU's band and
 // block walk per pixel (same arithmetic and neighbour skip, so the same blocks), a parallel look-up, creation of
 // the missing blocks by one work-item (no 64-bit atomics needed: OpenCL 1.2 has 32-bit ones only), then the shared
-// per-voxel kernel of fusion/kernels/integrate_kernels.h, projective or point-to-plane. On a device with
+// per-voxel kernel of fusion/kernels/integrate_kernels.h, projective or point-to-plane, and each updated block's
+// surface-free flag (VoxelBlockGrid::surface_free, for the raycast's block skip). On a device with
 // cl_khr_fp64 and correctly rounded division (PoCL) the voxels equal the CPU's bit for bit
 // (tests/fusion/opencl); without fp64 the band geometry is float and edge blocks may differ.
 //
@@ -25,8 +27,9 @@
 // nothing; an empty frame changes nothing.
 //
 // Not (yet) on the device: releasing blocks (garbage collection, streaming: the pool only grows until clear()),
-// deintegration, the frame pyramid. Thread-safety: one call at a time per map (the context's queue is shared: other
-// users of the context must serialise their own command sequences, as the registration backend does).
+// deintegration, colour in the raycast (the frame pyramid: registration/opencl/device_pyramid.h). Thread-safety:
+// one call at a time per map (the context's queue is shared: other users of the context must serialise their own
+// command sequences, as the registration backend does).
 #pragma once
 
 #include <cstddef>
@@ -94,13 +97,14 @@ class DeviceVoxelGrid {
   void clear();
 
   // The tracking raycast of fusion/raycast.h on the device map (fusion/opencl/raycast.cl: the range image, the
-  // march with cheap steps and missing-block jumps, the search around options.depth_hint first, the refined
-  // crossing, the normal; the samples from the shared kernel headers): depth, vertices and normals in the camera
-  // frame into *out (images resized as raycast() does), the head-light shading with options.shade (from the normals,
-  // on the host), colour black (options.color is not used); with options.skip_blocks surface-free blocks are crossed in one step (the flags integrate() keeps on the
-  // device and load() copies), empty 4^3-block regions as on the CPU. It samples where raycast() does, so the two
-  // agree but for float rounding of the ray set-up (tests/fusion/opencl). Throws hf::Error as raycast() does for bad options, a
-  // bad camera or pose, and for OpenCL failures. last_raycast_ms: the range image and the march, each to its end.
+  // march with cheap steps, jumps over missing blocks and empty 4^3-block regions, one-step crossings of
+  // surface-free blocks with options.skip_blocks (the flags integrate() keeps on the device and load() copies), the
+  // search around options.depth_hint first, the refined crossing, the normal; the samples from the shared kernel
+  // headers): depth, vertices and normals in the camera frame into *out (images resized as raycast() does), the
+  // head-light shading with options.shade (from the normals, on the host), colour black (options.color is not
+  // used). It samples where raycast() does, so the two agree but for float rounding of the ray set-up
+  // (tests/fusion/opencl). Throws hf::Error as raycast() does for bad options, a bad camera or pose, and for
+  // OpenCL failures. last_raycast_times(): the range image (with the region set), the march, the read-back.
   void raycast(const PinholeCamera& camera, const SE3& T_world_camera, const RaycastOptions& options,
                RaycastResult* out) const;
   struct RaycastTimes {
