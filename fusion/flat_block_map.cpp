@@ -28,7 +28,8 @@ FlatBlockMap flatten(const VoxelBlockGrid& grid, size_t table_entries) {
   const size_t entries = table_entries == 0 ? needed : table_entries;
   if (entries < needed || !std::has_single_bit(entries))
     throw Error("flatten: a table of " + std::to_string(entries) + " entries for " + std::to_string(blocks.size()) +
-                " blocks (needs a power of two >= " + std::to_string(needed) + "; did the grid grow since it was sized?)");
+                " blocks (needs a power of two >= " + std::to_string(needed) +
+                "; did the grid grow since it was sized?)");
   flat.table.assign(entries, hf_block_entry{0, 0, 0, 0});
   flat.shift = 64 - std::countr_zero(entries);
   flat.blocks = blocks.size();
