@@ -5,6 +5,7 @@
 
 #include <cstring>
 
+#include "core/error.h"
 #include "datasets/synthetic_sequence.h"
 #include "fusion/flat_block_map.h"
 #include "fusion/integrate.h"
@@ -127,6 +128,10 @@ TEST(SdfRegistration, TheFlatMapGivesTheHostGridsRows) {
     }
     EXPECT_GT(rows, 20000) << "min weight " << min_weight;
     EXPECT_EQ(differ, 0) << "min weight " << min_weight << ": of " << rows << " rows";
+    // A table sized for fewer blocks than the grid holds (the grid grew after the kernel's parameters were set) is
+    // refused, as is one that is not a power of two.
+    EXPECT_THROW(fusion::flatten(m.grid, 16), Error);
+    EXPECT_THROW(fusion::flatten(m.grid, 3 * fusion::flat_table_entries(m.grid.block_count())), Error);
     // The weight gate removes rows (the edges of the map saw fewer than 3 frames), on both paths alike.
     if (min_weight == 0.0f) {
       ungated_rows = rows;
