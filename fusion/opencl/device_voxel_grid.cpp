@@ -70,6 +70,7 @@ struct DeviceVoxelGrid::Impl {
   // The raycast's buffers, per image size (mutable: raycast() is const on the map).
   cl::Buffer rc_constants, rc_near, rc_far, rc_depth, rc_vertices, rc_normals, rc_hits, rc_hints;
   cl::Buffer rc_regions;  // the region occupancy set, `entries` slots
+  cl::Buffer rc_colour;   // 3 bytes per pixel
   size_t rc_pixels = 0, rc_tiles = 0;
   DeviceVoxelGrid::RaycastTimes rc_times;
   size_t entries = 0;
@@ -466,9 +467,10 @@ struct RaycastParams {
   cl_int min_weight_raw;
   cl_int skip_blocks;
   cl_uint region_mask;
+  cl_int colour;
   hf_intrinsics K;
 };
-static_assert(sizeof(RaycastParams) == 4 * (9 + 3 + 7 + 3) + sizeof(hf_intrinsics), "hf_raycast_params");
+static_assert(sizeof(RaycastParams) == 4 * (9 + 3 + 7 + 4) + sizeof(hf_intrinsics), "hf_raycast_params");
 
 template <class T>
 void ensure_image(Image<T>* img, int w, int h) {
@@ -493,7 +495,7 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
   ensure_image(&out->vertices, W, H);
   ensure_image(&out->normals, W, H);
   ensure_image(&out->color, W, H);
-  std::fill(out->color.data(), out->color.data() + n_pixels, Rgb8{});
+  if (!options.color) std::fill(out->color.data(), out->color.data() + n_pixels, Rgb8{});
   if (options.shade)
     ensure_image(&out->shaded, W, H);
   else
@@ -506,6 +508,7 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
       m.rc_vertices = cl::Buffer(c, CL_MEM_WRITE_ONLY, n_pixels * sizeof(hf_float4));
       m.rc_normals = cl::Buffer(c, CL_MEM_WRITE_ONLY, n_pixels * sizeof(hf_float4));
       m.rc_hints = cl::Buffer(c, CL_MEM_READ_ONLY, n_pixels * sizeof(float));
+      m.rc_colour = cl::Buffer(c, CL_MEM_WRITE_ONLY, n_pixels * 3);
       m.rc_pixels = n_pixels;
     }
     if (n_tiles > m.rc_tiles) {
@@ -566,6 +569,7 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
     P.min_weight_raw = std::max(1, int(hf_quantise_weight(std::max(0.0f, options.min_weight))));
     P.skip_blocks = options.skip_blocks ? 1 : 0;
     P.region_mask = cl_uint(m.entries - 1);
+    P.colour = options.color ? 1 : 0;
     P.K = camera.kernel_intrinsics();
     const cl_uint zero = 0;
     q.enqueueWriteBuffer(m.rc_hits, CL_FALSE, 0, sizeof(zero), &zero);
@@ -575,7 +579,7 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
              m.rc_near, m.rc_far, TW, m.rc_constants);
     m.march.setArg(11, sizeof(P), &P);
     set_args_from(m.march, 12, m.rc_hints, cl_int(has_hints ? 1 : 0), m.rc_depth, m.rc_vertices, m.rc_normals,
-                  m.rc_hits);
+                  m.rc_colour, m.rc_hits);
     // 8 x 8 work-groups: a group's rays are one range tile and read neighbouring voxels.
     q.enqueueNDRangeKernel(m.march, cl::NullRange, cl::NDRange(round_up(size_t(W), 8), round_up(size_t(H), 8)),
                            cl::NDRange(8, 8));
@@ -586,6 +590,8 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
     q.enqueueReadBuffer(m.rc_depth, CL_FALSE, 0, n_pixels * sizeof(float), out->depth.data());
     q.enqueueReadBuffer(m.rc_vertices, CL_FALSE, 0, n_pixels * sizeof(hf_float4), out->vertices.data());
     q.enqueueReadBuffer(m.rc_normals, CL_FALSE, 0, n_pixels * sizeof(hf_float4), out->normals.data());
+    static_assert(sizeof(Rgb8) == 3, "packed colour");
+    if (options.color) q.enqueueReadBuffer(m.rc_colour, CL_FALSE, 0, n_pixels * 3, out->color.data());
     q.enqueueReadBuffer(m.rc_hits, CL_TRUE, 0, sizeof(hits), &hits);
     m.rc_times.read_ms = ms_since(t2);
     out->hit_count = int(hits);

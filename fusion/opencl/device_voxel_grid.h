@@ -3,7 +3,7 @@
 //   auto ctx = hf::opencl::Context::shared();           // registration/opencl/opencl_context.h: device choice
 //   hf::fusion::DeviceVoxelGrid map(volume, ctx);        // volume: VolumeParams (validated)
 //   map.integrate(depth, colour, camera, T_world_camera, params);  // as fusion::integrate, on the device
-//   map.raycast(camera, T_world_camera, raycast_options, &model);  // as fusion::raycast (no colour)
+//   map.raycast(camera, T_world_camera, raycast_options, &model);  // as fusion::raycast
 //   VoxelBlockGrid grid(volume);  map.read_into(grid);   // meshing, streaming, save/load on the host
 //
 // Layout, VoxelBlockGrid's (fusion/block_hash_table.h, fusion/kernels/voxel.h): a table of
@@ -27,7 +27,7 @@
 // nothing; an empty frame changes nothing.
 //
 // Not (yet) on the device: releasing blocks (garbage collection, streaming: the pool only grows until clear()),
-// deintegration, colour in the raycast (the frame pyramid: registration/opencl/device_pyramid.h). Thread-safety:
+// deintegration (the frame pyramid: registration/opencl/device_pyramid.h). Thread-safety:
 // one call at a time per map (the context's queue is shared: other users of the context must serialise their own
 // command sequences, as the registration backend does).
 #pragma once
@@ -101,8 +101,8 @@ class DeviceVoxelGrid {
   // surface-free blocks with options.skip_blocks (the flags integrate() keeps on the device and load() copies), the
   // search around options.depth_hint first, the refined crossing, the normal; the samples from the shared kernel
   // headers): depth, vertices and normals in the camera frame into *out (images resized as raycast() does), the
-  // head-light shading with options.shade (from the normals, on the host), colour black (options.color is not
-  // used). It samples where raycast() does, so the two agree but for float rounding of the ray set-up
+  // trilinear colour with options.color (else black), the head-light shading with options.shade (from the
+  // normals, on the host). It samples where raycast() does, so the two agree but for float rounding of the ray set-up
   // (tests/fusion/opencl). Throws hf::Error as raycast() does for bad options, a bad camera or pose, and for
   // OpenCL failures. last_raycast_times(): the range image (with the region set), the march, the read-back.
   void raycast(const PinholeCamera& camera, const SE3& T_world_camera, const RaycastOptions& options,

@@ -21,7 +21,8 @@
 // one step, or its whole 4^3-block region when that holds no block (hf_raycast_regions builds the region set per
 // raycast from the hash), surface-free blocks in one step when skip_blocks is set (the flags the device's
 // integrate keeps, hf_fusion_surface_free, or load() copies), and a depth hint is searched first
-// (march_from_hint). Not on the device: colour (shading is done on the host from the normals).
+// (march_from_hint). Colour is the trilinear colour of the hit's cell (VolumeSampler::sdf_color); shading is done
+// on the host from the normals.
 
 #include "fusion/opencl/integrate.cl"  // hf_real, the HF_F_* constants (once per program: the embedder's rule)
 #include "fusion/kernels/raycast_kernels.h"
@@ -146,6 +147,7 @@ typedef struct {
   int min_weight_raw;
   int skip_blocks;    // RaycastOptions::skip_blocks: cross surface-free blocks in one step
   uint region_mask;   // the region occupancy set's size - 1
+  int colour;         // RaycastOptions::color: write the trilinear colour of each hit
   hf_intrinsics K;
 } hf_raycast_params;
 
@@ -316,6 +318,37 @@ inline int hf_raycast_from_hint(const hf_flat_map* map, __global const uint* sur
   }
 }
 
+// VolumeSampler::sdf_color's colour: the trilinear r, g, b of p's cell, rounded to 8 bits as raycast.cpp writes
+// them; black when a corner is unobserved.
+inline uchar4 hf_raycast_colour(const hf_flat_map* map, int min_weight_raw, const float* p) {
+  int c[3];
+  float fr[3];
+  for (int a = 0; a < 3; ++a) {
+    if (!(fabs(p[a]) < 1.0e9f)) return (uchar4)(0);
+    const float fl = floor(p[a]);
+    c[a] = (int)fl;
+    fr[a] = p[a] - fl;
+  }
+  hf_voxel v[8];
+  for (int k = 0; k < 8; ++k) {
+    const int vi = c[0] + (k & 1), vj = c[1] + ((k >> 1) & 1), vk = c[2] + ((k >> 2) & 1);
+    const int bx = hf_block_of_voxel(vi), by = hf_block_of_voxel(vj), bz = hf_block_of_voxel(vk);
+    const int e = hf_block_find(map->table, map->mask, map->shift, map->max_probe, bx, by, bz);
+    if (e < 0) return (uchar4)(0);
+    v[k] = map->pool[(ulong)(map->table[e].value - 1u) * HF_VOXELS_PER_BLOCK +
+                     (ulong)hf_voxel_index(vi - HF_BLOCK_SIZE * bx, vj - HF_BLOCK_SIZE * by, vk - HF_BLOCK_SIZE * bz)];
+    if ((int)v[k].weight < min_weight_raw) return (uchar4)(0);
+  }
+  const float r = hf_trilinear((float)v[0].r, (float)v[1].r, (float)v[2].r, (float)v[3].r, (float)v[4].r,
+                               (float)v[5].r, (float)v[6].r, (float)v[7].r, fr[0], fr[1], fr[2]);
+  const float g = hf_trilinear((float)v[0].g, (float)v[1].g, (float)v[2].g, (float)v[3].g, (float)v[4].g,
+                               (float)v[5].g, (float)v[6].g, (float)v[7].g, fr[0], fr[1], fr[2]);
+  const float b = hf_trilinear((float)v[0].b, (float)v[1].b, (float)v[2].b, (float)v[3].b, (float)v[4].b,
+                               (float)v[5].b, (float)v[6].b, (float)v[7].b, fr[0], fr[1], fr[2]);
+  return (uchar4)((uchar)clamp(r + 0.5f, 0.0f, 255.0f), (uchar)clamp(g + 0.5f, 0.0f, 255.0f),
+                  (uchar)clamp(b + 0.5f, 0.0f, 255.0f), (uchar)0);
+}
+
 // VolumeSampler::normal (h = 1): central differences of the trilinear samples one voxel apart at p's offset.
 inline hf_float4 hf_raycast_normal(const hf_flat_map* map, int min_weight_raw, const float* p) {
   int c[3];
@@ -344,7 +377,7 @@ __kernel void hf_raycast_march(__global const hf_block_entry* table, uint mask, 
                                __global const float* far_m, int tiles_x, __global const hf_real* f,
                                hf_raycast_params P, __global const float* hints, int has_hints,
                                __global float* depth, __global float4* vertices, __global float4* normals,
-                               volatile __global uint* hits) {
+                               __global uchar* colour, volatile __global uint* hits) {
   const int x = (int)get_global_id(0), y = (int)get_global_id(1);
   if (x >= P.K.width || y >= P.K.height) return;
   const int pixel = y * P.K.width + x;
@@ -388,10 +421,15 @@ __kernel void hf_raycast_march(__global const hf_block_entry* table, uint mask, 
                                                 P.R_wc[1] * n.x + P.R_wc[4] * n.y + P.R_wc[7] * n.z,
                                                 P.R_wc[2] * n.x + P.R_wc[5] * n.y + P.R_wc[8] * n.z, 1.0f)
                                      : (float4)(0.0f);
+    if (P.colour) {
+      const uchar4 c = hf_raycast_colour(&map, P.min_weight_raw, p);
+      colour[3 * pixel] = c.x, colour[3 * pixel + 1] = c.y, colour[3 * pixel + 2] = c.z;
+    }
     atomic_inc(hits);
   } else {
     depth[pixel] = 0.0f;
     vertices[pixel] = (float4)(0.0f);
     normals[pixel] = (float4)(0.0f);
+    if (P.colour) colour[3 * pixel] = colour[3 * pixel + 1] = colour[3 * pixel + 2] = (uchar)0;
   }
 }

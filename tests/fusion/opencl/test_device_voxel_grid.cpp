@@ -158,7 +158,8 @@ TEST(DeviceVoxelGrid, LoadedHostMapContinuesAsOnTheCpu) {
 // fraction of a degree. Hits and misses differ only where the two sampling patterns differ (the CPU also jumps
 // empty 4^3-block regions, the device one block at a time): at silhouettes and the fringe of the observed volume,
 // the class raycast()'s own skip_blocks / depth_hint tests allow (0.1-0.5 % of the pixels). Measured on PoCL, with
-// and without a depth hint: no pixel differs in hit or miss, depths within 1.7e-5 m, no normal 0.5 degrees apart.
+// and without a depth hint: no pixel differs in hit or miss, depths within 2.2e-5 m, no normal 0.5 degrees apart;
+// shading and colour (trilinear, 8 bits) within one level.
 TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
   HF_CONTEXT_OR_SKIP(ctx);
   const VolumeParams volume = params_1cm();
@@ -183,7 +184,6 @@ TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
     fused.integrate(f.depth, f.color, camera, f.T_world_camera);
   }
   RaycastOptions ro;
-  ro.color = false;
   // Cast from an unfused pose without a hint, and from a fused frame's pose with its depth as the hint (the
   // pipeline's tracking raycast: each ray searches around the measured depth first); surface-free blocks walked
   // and skipped.
@@ -199,7 +199,7 @@ TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
     (on_fused ? fused : device).raycast(camera, pose, o, &b);
     ASSERT_EQ(b.depth.width(), camera.width);
     ASSERT_EQ(b.shaded.width(), camera.width);
-    long both = 0, one = 0, depth_off = 0, normal_off = 0, normals = 0, shade_off = 0;
+    long both = 0, one = 0, depth_off = 0, normal_off = 0, normals = 0, shade_off = 0, colour_off = 0;
     double max_depth = 0.0;
     for (int y = 0; y < camera.height; ++y)
       for (int x = 0; x < camera.width; ++x) {
@@ -216,6 +216,8 @@ TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
         const hf_float4 na = a.normals(x, y), nb = b.normals(x, y);
         EXPECT_EQ(b.vertices(x, y).w, 1.0f);
         shade_off += std::abs(int(a.shaded(x, y).r) - int(b.shaded(x, y).r)) > 1;  // grey levels
+        const Rgb8 ca = a.color(x, y), cb = b.color(x, y);
+        colour_off += std::max({std::abs(ca.r - cb.r), std::abs(ca.g - cb.g), std::abs(ca.b - cb.b)}) > 1;
         if (na.w == 0.0f || nb.w == 0.0f) {
           normal_off += na.w != nb.w;
           continue;
@@ -233,6 +235,7 @@ TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
     EXPECT_LE(depth_off, both / 200);
     EXPECT_LE(normal_off, both / 200);
     EXPECT_LE(shade_off, both / 200);
+    EXPECT_LE(colour_off, both / 200);
   }
   const SE3 pose = seq.frame(11).T_world_camera;
   RaycastResult b;
