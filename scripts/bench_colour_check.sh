@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# scripts/bench_colour_check.sh OUT_DIR: the colour-registration check (issue 13, slam/colour_check.h) on every real
+# sequence in ../shared/data (whole, and split where the threshold was chosen on one part: fr1/rpy 0-149 and
+# 7-Scenes 0-99 chose it; fr1/rpy 150-269, fr1/desk and 7-Scenes 100-199 report it) and on the synthetic room /
+# unregistered presets, each with the check on (the default) and off. Release `hashfusion run`, defaults otherwise.
+# Writes OUT_DIR/colour_check.{md,json}.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+out="${1:-out/bench_colour_check}"
+hf="${HF_BIN:-build/release/apps/hashfusion}"
+shared="../shared/data"
+[[ -x "$hf" ]] || { echo "bench_colour_check: build first ($hf missing)" >&2; exit 1; }
+[[ -d "$shared" ]] || { echo "bench_colour_check: $shared is absent" >&2; exit 1; }
+mkdir -p "$out/runs"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+# 7-Scenes in two halves (folders of links; the reader takes any frame-NNNNNN run).
+seven="$(realpath "$shared/7scenes_tsdf_fusion_first200")"
+for part in "0 99" "100 199"; do
+  set -- $part
+  d="$work/7scenes_frames$1_$2"
+  mkdir -p "$d"
+  cp "$seven/camera-intrinsics.txt" "$d/"
+  for i in $(seq "$1" "$2"); do
+    f="$(printf 'frame-%06d' "$i")"
+    for e in color.jpg depth.png pose.txt; do ln -s "$seven/$f.$e" "$d/$f.$e"; done
+  done
+done
+echo '{"colour_check": {"enabled": false}}' > "$work/off.json"
+inputs=(
+  "$shared/tum_fr1_rpy_first150" "$shared/tum_fr1_rpy_frames150_269" "$shared/tum_fr1_desk_9frames"
+  "$work/7scenes_frames0_99" "$work/7scenes_frames100_199" "$seven" "synthetic:room" "synthetic:unregistered"
+)
+for input in "${inputs[@]}"; do
+  name="$(basename "$input")"
+  name="${name/synthetic:/synthetic_}"
+  frames=()
+  [[ "$name" == synthetic_* ]] && frames=(--synthetic-frames 120)
+  for mode in on off; do
+    args=(run --input "$input" --out "$out/runs/${name}__$mode" "${frames[@]}")
+    [[ "$mode" == off ]] && args+=(--config "$work/off.json")
+    echo "bench_colour_check: $name $mode" >&2
+    "$hf" "${args[@]}" > /dev/null 2> "$out/runs/${name}__$mode.log" || echo "  failed (see the log)" >&2
+  done
+done
+
+python3 - "$out" <<'PY'
+import json, os, statistics, sys
+out = sys.argv[1]
+rows = []
+for d in sorted(os.listdir(os.path.join(out, "runs"))):
+    p = os.path.join(out, "runs", d, "report.json")
+    if not os.path.isfile(p):
+        continue
+    j = json.load(open(p))
+    name, mode = d.rsplit("__", 1)
+    scales = [f["colour_alignment"]["scale"] for f in j["per_frame"]
+              if f.get("colour_alignment", {}).get("valid")]
+    chi2 = [f["terms"]["chi2"] for f in j["per_frame"] if "terms" in f]
+    cc = j["colour_check"]
+    rows.append({"input": name, "check": mode, "frames": j["frames"], "lost": j["frames_lost"],
+                 "verdict": cc["verdict"], "median_scale": cc["median_scale"],
+                 "decided_at_frame": cc["decided_at_frame"], "tracking": cc["tracking_registration"],
+                 "estimates": len(scales), "scale_min": min(scales) if scales else None,
+                 "scale_max": max(scales) if scales else None,
+                 "terms_chi2_median": statistics.median(chi2) if chi2 else None,
+                 "ate_cm": 100 * j["ate_rmse_m"] if j["ate_rmse_m"] is not None else None,
+                 "track_ms": j["ms_per_frame"]["track"], "fps": j["fps"]})
+json.dump(rows, open(os.path.join(out, "colour_check.json"), "w"), indent=1)
+f = lambda v, p=2: "-" if v is None else f"{v:.{p}f}"
+with open(os.path.join(out, "colour_check.md"), "w") as md:
+    md.write("| input | check | frames | lost | verdict | median s (min-max of the estimates) | decided at | tracked by"
+             " | combined's terms chi2 (median) | ATE cm | track ms | fps |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+    for r in rows:
+        md.write(f"| {r['input']} | {r['check']} | {r['frames']} | {r['lost']} | {r['verdict']} | "
+                 f"{f(r['median_scale'], 3)} ({f(r['scale_min'], 3)}-{f(r['scale_max'], 3)}) | "
+                 f"{'-' if r['decided_at_frame'] is None else r['decided_at_frame']} | {r['tracking']} | "
+                 f"{f(r['terms_chi2_median'], 0)} | {f(r['ate_cm'])} | {f(r['track_ms'], 1)} | {f(r['fps'], 1)} |\n")
+print(open(os.path.join(out, "colour_check.md")).read())
+PY
