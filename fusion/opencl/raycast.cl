@@ -208,7 +208,7 @@ inline float hf_raycast_cube_exit(const float* o, const float* d, int i, int j, 
   return t_exit;
 }
 
-// raycast.cpp's march() without the region jump and the surface-free skip: 1 and *t_hit at a crossing.
+// raycast.cpp's march(), step for step: 1 and *t_hit at a crossing.
 inline int hf_raycast_ray(const hf_flat_map* map, __global const uint* surface_free, __global const uint* regions,
                           const hf_raycast_params* P, const float* o, const float* d, float t_min, float t_max,
                           float* t_hit) {
