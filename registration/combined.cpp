@@ -28,9 +28,10 @@ struct BalancedTerm {
   double lmax = 0.0;
 };
 
-bool balance(const NormalEquations& term, const Vector6d& unit_scale, double threshold, BalancedTerm* out) {
-  out->H = unit_scale.asDiagonal() * term.JtJ * unit_scale.asDiagonal();
-  out->g = unit_scale.cwiseProduct(term.Jtr);
+bool balance(const NormalEquations& term, const Vector6d& unit_scale, double threshold, const Matrix6d& keep,
+             BalancedTerm* out) {
+  out->H = keep * (unit_scale.asDiagonal() * term.JtJ * unit_scale.asDiagonal()) * keep;
+  out->g = keep * unit_scale.cwiseProduct(term.Jtr);
   out->P = Matrix6d::Identity();
   if (!out->H.allFinite() || !out->g.allFinite()) return false;
   const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(out->H);
@@ -52,12 +53,14 @@ bool balance(const NormalEquations& term, const Vector6d& unit_scale, double thr
 // (which lambda = rgb_weight would make arbitrary). s moves neither the solution (g = 0 needs P_i (g_i + g_p) = 0
 // and (I - P_i) g_p = 0 for any s > 0) nor anything where icp is well constrained (Q = I there).
 NormalEquations combine_per_direction(const NormalEquations& icp, const NormalEquations& photometric,
-                                      const Vector6d& unit_scale, double icp_threshold, double photometric_threshold) {
+                                      const Vector6d& unit_scale, double icp_threshold, double photometric_threshold,
+                                      const Matrix6d& icp_keep) {
   NormalEquations out;
   out.cost = icp.cost + photometric.cost;
   out.count = icp.count + photometric.count;
   BalancedTerm i, p;
-  if (!balance(icp, unit_scale, icp_threshold, &i) || !balance(photometric, unit_scale, photometric_threshold, &p)) {
+  if (!balance(icp, unit_scale, icp_threshold, icp_keep, &i) ||
+      !balance(photometric, unit_scale, photometric_threshold, Matrix6d::Identity(), &p)) {
     out.JtJ = icp.JtJ + photometric.JtJ;  // non-finite: the driver reports it
     out.Jtr = icp.Jtr + photometric.Jtr;
     return out;
@@ -74,14 +77,63 @@ NormalEquations combine_per_direction(const NormalEquations& icp, const NormalEq
   return out;
 }
 
+}  // namespace
+
+// icp's weak eigen-directions (balanced units, eigenvalue at or below icp_probe_ratio of its largest) checked
+// against the cost: the icp term is reduced again at the estimate moved by +-icp_probe_step_m along each, its
+// correspondences found anew, and the cost's second difference (per row, so rows entering or leaving at the edges
+// do not count) is compared with what the normal equations claim, c(+d) + c(-d) - 2 c(0) = 2 d^2 lambda. Along a
+// corridor's axis the point-to-plane residuals do not change when the camera slides (every point meets the same
+// walls again), so the information there comes from the normals' noise and the residuals' noise, not from the
+// geometry: the cost stays flat while lambda says otherwise. Such a direction (observed / claimed below
+// icp_probe_min_ratio) is left out of icp's term. The result: the projector onto the directions kept.
+Matrix6d icp_observed_directions(const NormalEquations& icp, const Vector6d& unit_scale, const CombinedOptions& o,
+                                 const DenseMethod::TermProbe& reduce_at, std::vector<IcpDirectionProbe>* probes) {
+  Matrix6d keep = Matrix6d::Identity();
+  if (probes) probes->clear();
+  if (!(o.icp_probe_ratio > 0.0) || icp.count < 6) return keep;
+  const Matrix6d H = unit_scale.asDiagonal() * icp.JtJ * unit_scale.asDiagonal();
+  if (!H.allFinite() || !std::isfinite(icp.cost)) return keep;
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(H);
+  if (eig.info() != Eigen::Success) return keep;
+  const double lmax = eig.eigenvalues()(5);
+  if (!(lmax > 0.0)) return keep;
+  const double c0 = icp.cost / double(icp.count);
+  const double d = o.icp_probe_step_m;
+  for (int k = 0; k < 5; ++k) {
+    const double lambda = eig.eigenvalues()(k);
+    if (lambda > o.icp_probe_ratio * lmax) break;  // ascending: the rest are stronger
+    const Vector6d v = eig.eigenvectors().col(k);
+    const NormalEquations plus = reduce_at(0, d * unit_scale.cwiseProduct(v));
+    const NormalEquations minus = reduce_at(0, -d * unit_scale.cwiseProduct(v));
+    if (plus.count < 6 || minus.count < 6 || !std::isfinite(plus.cost) || !std::isfinite(minus.cost)) continue;
+    // Per-row costs times the rows at the estimate: the second difference of the cost at a fixed row count.
+    const double second = (plus.cost / double(plus.count) + minus.cost / double(minus.count) - 2.0 * c0) *
+                          double(icp.count);
+    const double claimed = 2.0 * d * d * std::max(lambda, 0.0);
+    const double observed_ratio = claimed > 0.0 ? second / claimed : 0.0;
+    const bool kept = observed_ratio >= o.icp_probe_min_ratio;
+    if (!kept) keep -= v * v.transpose();
+    if (probes) probes->push_back({v, lambda / lmax, observed_ratio, kept});
+  }
+  return keep;
+}
+
+namespace {
+
 class CombinedMethod final : public DenseMethod {
  public:
   explicit CombinedMethod(const CombinedOptions& options) : options_(options) {}
   const DenseKernel& kernel() const override { return kKernel; }
-  void begin_level(int level, const FramePyramidLevel&, const FramePyramidLevel&, ResidualProblem&) override {
+  void begin_level(int level, const FramePyramidLevel& current, const FramePyramidLevel& reference,
+                   ResidualProblem& problem) override {
     params_.icp = options_.icp.kernel_params();
     params_.photometric =
         options_.photometric.kernel_params(level, options_.rgb_weight, options_.photometric.t_sigma_rgb_init);
+    if (options_.photometric.brightness_gain) {
+      params_.photometric.gain = estimate_brightness_gain(current, reference, problem.T_ref_cur,
+                                                          options_.photometric.brightness_gain_max_ratio);
+    }
   }
   const void* params() const override { return &params_; }
   double rows_possible(const FramePyramidLevel& current) const override {
@@ -96,13 +148,34 @@ class CombinedMethod final : public DenseMethod {
     return p;
   }
   NormalEquations combine_terms(const std::vector<NormalEquations>& terms, const Vector6d& unit_scale) const override {
+    photometric_cost_ = terms[1].cost;
+    photometric_rows_ = terms[1].count;
     return combine_per_direction(terms[0], terms[1], unit_scale, options_.icp_term_threshold,
-                                 options_.photometric_term_threshold);
+                                 options_.photometric_term_threshold, icp_keep_);
+  }
+  // DVO's scale of the photometric term, as photometric alone re-estimates it (photometric.cpp), from the term's
+  // own rows: their cost is lambda sum w r^2, so sigma^2 = cost / (lambda n). Reduced apart from icp's rows, the
+  // term's scale no longer mixes metres and intensities.
+  void end_iteration(const NormalEquations&) override {
+    const PhotometricOptions& po = options_.photometric;
+    if (po.robust_rgb != RobustKernel::student_t || photometric_rows_ <= 0 || !(options_.rgb_weight > 0.0f)) return;
+    const double sigma2 = photometric_cost_ / (double(options_.rgb_weight) * double(photometric_rows_));
+    if (std::isfinite(sigma2) && sigma2 >= 0.0)
+      params_.photometric.robust.scale = std::max(po.t_sigma_rgb_min, float(std::sqrt(sigma2)));
+  }
+  void probe_terms(const std::vector<NormalEquations>& terms, const Vector6d& unit_scale,
+                   const TermProbe& reduce_at) override {
+    icp_keep_ = icp_observed_directions(terms[0], unit_scale, options_, reduce_at, nullptr);
   }
 
  private:
   CombinedOptions options_;
   hf_combined_params params_{};
+  // The photometric term's own cost and rows of the last reduction (combine_terms is the one place the driver
+  // hands over the terms; end_iteration re-estimates the term's scale from them).
+  mutable double photometric_cost_ = 0.0;
+  mutable long photometric_rows_ = 0;
+  Matrix6d icp_keep_ = Matrix6d::Identity();
 };
 
 RegistrationOptions defaults() {
@@ -122,6 +195,9 @@ void CombinedOptions::visit(OptionVisitor& v) {
   v("rgb_weight", rgb_weight);
   v("icp_term_threshold", icp_term_threshold);
   v("photometric_term_threshold", photometric_term_threshold);
+  v("icp_probe_ratio", icp_probe_ratio);
+  v("icp_probe_step_m", icp_probe_step_m);
+  v("icp_probe_min_ratio", icp_probe_min_ratio);
 }
 
 void CombinedOptions::validate() const {
@@ -133,6 +209,11 @@ void CombinedOptions::validate() const {
   require_option(std::isfinite(photometric_term_threshold) && photometric_term_threshold >= 0.0 &&
                      photometric_term_threshold < 1.0,
                  "photometric_term_threshold must be in [0, 1)");
+  require_option(std::isfinite(icp_probe_ratio) && icp_probe_ratio >= 0.0 && icp_probe_ratio < 1.0,
+                 "icp_probe_ratio must be in [0, 1)");
+  require_option(std::isfinite(icp_probe_step_m) && icp_probe_step_m > 0.0, "icp_probe_step_m must be > 0");
+  require_option(std::isfinite(icp_probe_min_ratio) && icp_probe_min_ratio >= 0.0,
+                 "icp_probe_min_ratio must be >= 0");
 }
 
 RegistrationMethod combined_registration_method() { return {"combined", defaults, make}; }

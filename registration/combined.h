@@ -3,10 +3,12 @@
 // (CombinedOptions::icp_term_threshold; RegistrationResult::terms has both informations). Per-pixel rows: the
 // two terms' kernels; registration/kernels/combined_kernel.h is all the rows in one reduction (kernel(), what
 // GaussNewtonRegistration::level_problem gives).
-// Defaults: Huber weights on both terms (the photometric scale cannot be re-estimated from a cost that mixes
-// metres and intensities), lambda = rgb_weight.
+// Defaults: Huber weights on both terms, lambda = rgb_weight. With Student-t on the photometric term its scale is
+// re-estimated from that term's own rows each iteration, as photometric alone does (TUM fr1/rpy 0-149: 2.55 cm
+// against Huber's 1.87, so Huber stays the default).
 #pragma once
 
+#include "registration/dense_method.h"
 #include "registration/icp.h"
 #include "registration/photometric.h"
 
@@ -31,11 +33,39 @@ struct CombinedOptions : MethodOptionsBase<CombinedOptions> {
   // sequences: bench/results/registration.md ("combined: per-term degeneracy").
   double icp_term_threshold = 1e-2;
   double photometric_term_threshold = 0.0;
+  // The observed-information check of icp's weak directions (icp_observed_directions below), once per pyramid
+  // level: icp's eigen-directions at or below icp_probe_ratio of its largest are probed at +-icp_probe_step_m
+  // (balanced metres) and left out of icp's term where the cost's curvature is below icp_probe_min_ratio of the
+  // one its normal equations claim. 0: no check (the default). Measured (bench/results/registration.md,
+  // "combined: observed information, brightness gain"): with 0.05 / 5 mm / 0.5 the corridor pair goes from 9.7 to
+  // 1.8 mm (photometric 1.8 mm) and the corridor sequence from 14.3 to 9.6 mm, but TUM fr1/rpy 0-149 from 1.87 to
+  // 2.0-2.9 cm (its weak directions show 0.1-0.9 of their claimed curvature through the model raycast), so it is
+  // off by default.
+  double icp_probe_ratio = 0.0;
+  double icp_probe_step_m = 0.005;
+  double icp_probe_min_ratio = 0.5;
 
-  CombinedOptions() { photometric.robust_rgb = RobustKernel::huber; }
+  // Exposure: the photometric term's brightness gain (PhotometricOptions::brightness_gain) is on here: exposure
+  // sequence 1.98 -> 0.73 mm (icp 1.00 mm), TUM fr1/rpy 0-149 1.870 -> 1.872 cm with max_ratio 0.1, where without
+  // the max_ratio test (every estimated gain used) TUM gets 2.11 cm. Chosen there, reported on the rest:
+  // bench/results/registration.md ("combined: observed information, brightness gain").
+  CombinedOptions() {
+    photometric.robust_rgb = RobustKernel::huber;
+    photometric.brightness_gain = true;
+  }
   void visit(OptionVisitor& v) override;  // icp's keys, photometric's keys, rgb_weight
   void validate() const override;
 };
+
+// One probed direction of icp_observed_directions (balanced units), for tests and diagnostics.
+struct IcpDirectionProbe {
+  Vector6d direction;
+  double eigen_ratio = 0.0;     // its eigenvalue over icp's largest
+  double observed_ratio = 0.0;  // the cost's second difference over the one the normal equations claim
+  bool kept = true;
+};
+Matrix6d icp_observed_directions(const NormalEquations& icp, const Vector6d& unit_scale, const CombinedOptions& o,
+                                 const DenseMethod::TermProbe& reduce_at, std::vector<IcpDirectionProbe>* probes);
 
 RegistrationMethod combined_registration_method();
 

@@ -279,7 +279,7 @@ HF_AVX2_INLINE bool photometric_rows(const ResidualProblem& p, const hf_photomet
              cmp_gt(_mm256_andnot_ps(splat(-0.0f), sub(vr_z, v.z)), splat(prm.occlusion_max_depth_m)));
     valid = _mm256_andnot_ps(occluded, valid);
   }
-  const __m256 r = sub(i_ref, gather(map<float>(p, HF_REG_IN_CUR_INTENSITY), px8.index));
+  const __m256 r = sub(i_ref, mul(splat(prm.gain), gather(map<float>(p, HF_REG_IN_CUR_INTENSITY), px8.index)));
   const __m256 inv_z = _mm256_div_ps(splat(1.0f), v.z);
   const __m256 ax = mul(mul(gx, splat(K.fx)), inv_z);
   const __m256 ay = mul(mul(gy, splat(K.fy)), inv_z);

@@ -12,6 +12,7 @@
 // registration/README.md says how to add one.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -63,6 +64,17 @@ class DenseMethod {
   virtual NormalEquations combine_terms(const std::vector<NormalEquations>& terms, const Vector6d& unit_scale) const {
     (void)unit_scale;
     return terms.empty() ? NormalEquations{} : terms.front();
+  }
+  // Once per level, at its first iteration (before combine_terms), with that iteration's terms: a method may
+  // reduce term t again at the pose moved by xi (tangent vector, applied on the left of the current estimate),
+  // e.g. to check a term's information against the curvature its cost shows when the correspondences are
+  // re-found (combined). Whatever it learns applies to combine_terms() for the rest of the level.
+  using TermProbe = std::function<NormalEquations(int term, const Vector6d& xi)>;
+  virtual void probe_terms(const std::vector<NormalEquations>& terms, const Vector6d& unit_scale,
+                           const TermProbe& reduce_at) {
+    (void)terms;
+    (void)unit_scale;
+    (void)reduce_at;
   }
 
   // A method whose rows read a map rather than the reference pyramid (sdf): Registration::aligns_to_volume and

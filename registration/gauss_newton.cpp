@@ -255,6 +255,7 @@ ResidualProblem GaussNewtonRegistration::level_problem(const FramePyramid& curre
   problem.kernel = &method_->kernel();
   problem.camera = c.camera.kernel_intrinsics();
   set_pyramid_maps(*problem.kernel, c, r, problem);
+  problem.T_ref_cur = to_transform12(T_ref_cur);  // begin_level may read the estimate (photometric's brightness)
   method_->begin_level(level, c, r, problem);
   const PixelSelectionOptions& selection = options_.driver.row_selection;
   if (selection.enabled() && level < selection.levels &&
@@ -323,6 +324,13 @@ RegistrationResult GaussNewtonRegistration::align_impl(const FramePyramid& curre
       for (ResidualProblem& tp : term_problems) {
         tp.T_ref_cur = problem.T_ref_cur;
         terms.push_back(backend_->reduce(tp));
+      }
+      if (it == 0 && !terms.empty()) {
+        method_->probe_terms(terms, unit_scale, [&](int t, const Vector6d& xi) {
+          ResidualProblem moved = term_problems[size_t(t)];
+          moved.T_ref_cur = to_transform12(SE3::exp(xi) * T);
+          return backend_->reduce(moved);
+        });
       }
       const NormalEquations ne = terms.empty() ? backend_->reduce(problem) : method_->combine_terms(terms, unit_scale);
       if (l == 0) {

@@ -29,6 +29,13 @@ struct PhotometricOptions : MethodOptionsBase<PhotometricOptions> {
   // Rows at the finest level only for every step-th current pixel in x and y (1 = all; coarser levels use every
   // pixel); the reference is still sampled at full resolution. 2: a quarter of the cost for little accuracy.
   int finest_level_photometric_step = 2;
+  // Exposure: before each level's iterations the current frame's brightness gain against the reference is
+  // estimated at the correspondences of the estimate so far (estimate_brightness_gain) and the residual becomes
+  // I_ref(w) - gain I_cur, where the gain explains the intensity residual (its median at most
+  // brightness_gain_max_ratio of the one under brightness constancy); else constancy (gain 1). Off for photometric
+  // alone (not measured there); combined turns it on (registration/combined.h has the measurement).
+  bool brightness_gain = false;
+  float brightness_gain_max_ratio = 0.1f;
 
   void visit(OptionVisitor& v) override;
   void validate() const override;
@@ -37,6 +44,14 @@ struct PhotometricOptions : MethodOptionsBase<PhotometricOptions> {
   // The rows it can give at the finest level: valid current pixels on its grid.
   double rows_possible(const FramePyramidLevel& current) const;
 };
+
+// The current frame's brightness gain against the reference, I_ref ~ gain I_cur: the ratio of the mean
+// intensities at the correspondences of T_ref_cur (current pixels on a step grid warped with their depth, bilinear
+// reference samples), once more without the pairs beyond 3 robust standard deviations, clamped to [0.5, 2]. It is
+// returned where it explains the residual (median |I_ref - gain I_cur| at most max_ratio of median |I_ref - I_cur|
+// over those pairs), else 1; also 1 with fewer than 100 pairs or no intensity.
+float estimate_brightness_gain(const FramePyramidLevel& current, const FramePyramidLevel& reference,
+                               const hf_transform12& T_ref_cur, float max_ratio, int step = 2);
 
 // The term's kernel (combined reduces it as one of its terms).
 const DenseKernel& photometric_kernel();

@@ -3,7 +3,9 @@
 //
 // Frame-to-frame on intensity: the current pixel's vertex (from the current depth) is warped into the reference
 // camera, w = Pi(K T_ref_cur v_cur) (eq. 28), and the residual is r = I_ref(w) - I_cur(p) (eq. 31) with bilinear
-// sampling. The Jacobian is the chain rule of eq. 34-45: a = grad I_ref(w) dPi/dv (eq. 36-37 with K folded in),
+// sampling, or r = I_ref(w) - gain I_cur(p) where the exposure changed (DSO's brightness transfer without its offset;
+// the gain is estimated per level before the iterations, registration/photometric.h). The Jacobian is the chain
+// rule of eq. 34-45: a = grad I_ref(w) dPi/dv (eq. 36-37 with K folded in),
 // J = a^T [ [-v]x I ]. Pixels are skipped when they are off the step grid, the vertex is invalid, behind the
 // camera, warped outside the image (all bilinear taps must be inside), when the reference gradient is below
 // min_gradient_sq, or (occlusion_check) when the reference vertex at the nearest pixel is valid and more than
@@ -23,6 +25,7 @@ typedef struct {
                                // that pixel by more than occlusion_max_depth_m
   float occlusion_max_depth_m;
   int step;                    // rows only for current pixels with x and y multiples of this (<= 1: every pixel)
+  float gain;                  // brightness gain of the current frame (r = I_ref(w) - gain I_cur); 1: constancy
 } hf_photometric_params;
 
 // Returns 1 and fills *row when pixel (x, y) of the current frame yields a photometric residual, else 0.
@@ -47,7 +50,7 @@ HF_INLINE int hf_photometric_pixel(int x, int y, const hf_reg_maps* maps, hf_int
     const hf_float4 vr = hf_reg_map4(maps, HF_REG_IN_REF_VERTICES)[w * K.width + u];
     if (hf_is_valid4(vr) && hf_fabs(vr.z - v.z) > p.occlusion_max_depth_m) return 0;
   }
-  const float r = i_ref - maps->map[HF_REG_IN_CUR_INTENSITY][idx];
+  const float r = i_ref - p.gain * maps->map[HF_REG_IN_CUR_INTENSITY][idx];
   const float inv_z = 1.0f / v.z;
   const float ax = gx * K.fx * inv_z;
   const float ay = gy * K.fy * inv_z;

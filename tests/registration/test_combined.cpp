@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "reg_test_util.h"
 #include "registration/combined.h"
+#include "registration/gauss_newton.h"
 
 namespace hf {
 namespace {
@@ -103,12 +104,165 @@ TEST(Combined, HardCasesWithinOneAndAHalfOfTheBestSingleMethod) {
   }
 }
 
+// icp's term reduced again at the initial guess (identity) moved along each of its weak directions, as the
+// driver's probe does (DenseMethod::probe_terms), at the finest level.
+std::vector<IcpDirectionProbe> probe_at_guess(const test::FramePair& pair, const CombinedOptions& o) {
+  test::MethodUnderTest m = test::method_under_test("combined");
+  auto backend = make_backend("cpu");
+  const SE3 at_pose;  // the driver's starting guess on a pair
+  const ResidualProblem level = m.dense->level_problem(pair.current, pair.reference, 0, at_pose);
+  const ResidualProblem icp = m.dense->method().term_problem(0, level);
+  const NormalEquations at = backend->reduce(icp);
+  std::vector<IcpDirectionProbe> probes;
+  icp_observed_directions(at, balanced_units(pair.current.levels[0].vertices), o,
+                          [&](int, const Vector6d& xi) {
+                            ResidualProblem moved = icp;
+                            moved.T_ref_cur = to_transform12(SE3::exp(xi) * at_pose);
+                            return backend->reduce(moved);
+                          },
+                          &probes);
+  return probes;
+}
+
+CombinedOptions probing() {
+  CombinedOptions o;
+  o.icp_probe_ratio = 0.05;
+  return o;
+}
+
+// Sliding along the corridor, every point meets the same walls again, so icp's cost curves less than its normal
+// equations claim along some of its weak directions (those that mix the axis with rotations; at the guess the
+// finest level's observed / claimed is 0.27-0.47 for three of four, measured), and the check leaves them out. On
+// the room every weak direction is real geometry and curves as claimed within the Huber weights' and the
+// re-association's effect (observed / claimed 0.73-0.82 measured; above 0.5 asserted): nothing is left out. The
+// classification of single directions is not sharp (bench/results/registration.md): the end-to-end test below is
+// the behaviour that matters.
+TEST(Combined, ObservedInformationLeavesOutCorridorDirectionsNotRoomOnes) {
+  for (std::uint64_t seed : {1ull, 2ull}) {
+    int left_out = 0;
+    for (const IcpDirectionProbe& p : probe_at_guess(test::make_pair("corridor", 5, 6, true, seed), probing())) {
+      std::printf("corridor seed %d: eigen ratio %.4f observed %.3f kept %d\n", int(seed), p.eigen_ratio,
+                  p.observed_ratio, int(p.kept));
+      EXPECT_TRUE(std::isfinite(p.observed_ratio));
+      left_out += p.kept ? 0 : 1;
+    }
+    EXPECT_GE(left_out, 1);
+    const std::vector<IcpDirectionProbe> room = probe_at_guess(test::make_pair("room", 5, 6, true, seed), probing());
+    EXPECT_FALSE(room.empty());
+    for (const IcpDirectionProbe& p : room) {
+      std::printf("room seed %d: eigen ratio %.4f observed %.3f\n", int(seed), p.eigen_ratio, p.observed_ratio);
+      EXPECT_GT(p.observed_ratio, 0.5);
+      EXPECT_TRUE(p.kept);
+    }
+  }
+}
+
+// With the check on, the corridor pair's axis comes from the photometric term alone, and combined is within 1.5x
+// of photometric (measured 1.8 / 2.3 mm against 1.8 / 1.7 mm); without it (the default) icp's flat axis keeps a
+// third of the motion (9.7 mm).
+TEST(Combined, CorridorWithTheObservedInformationCheckWithinOneAndAHalfOfPhotometric) {
+  for (std::uint64_t seed : {1ull, 2ull}) {
+    const test::FramePair pair = test::make_pair("corridor", 5, 6, true, seed);
+    RegistrationOptions checked = default_registration_options("combined");
+    checked.method_as<CombinedOptions>().icp_probe_ratio = 0.05;
+    const RegistrationResult c =
+        make_registration("combined", checked, make_backend("cpu"))->align(pair.current, pair.reference, SE3());
+    const RegistrationResult p = align("photometric", pair);
+    const double ec = test::translation_error_m(c.T_ref_cur, pair.T_ref_cur_true);
+    const double ep = test::translation_error_m(p.T_ref_cur, pair.T_ref_cur_true);
+    const double e_default = test::translation_error_m(align("combined", pair).T_ref_cur, pair.T_ref_cur_true);
+    std::printf("corridor seed %d: combined checked %.2f mm, default %.2f mm, photometric %.2f mm\n", int(seed),
+                ec * 1e3, e_default * 1e3, ep * 1e3);
+    test::expect_finite(c);
+    EXPECT_TRUE(c.usable()) << c.message;
+    EXPECT_LT(ec, 1.5 * ep);
+    EXPECT_LT(ec, e_default);
+  }
+}
+
+// The exposure pair (frames 4, 5): the estimated gain is the ratio of the frames' exposures (the preset's gains;
+// 2 % for the colour noise, 8-bit rounding and clipping), used where it explains the residual (seed 2: 1.41, the
+// error drops from 0.78 to 0.24 mm; seed 1's 1.04 is left at 1), and combined is within 1.5x of the best single
+// method and no worse than under brightness constancy. On the room (no exposure change) the gain
+// explains nothing, the test gives 1 exactly, and combined is unchanged to the bit.
+TEST(Combined, ExposureGainIsEstimatedWhereItExplainsTheResidual) {
+  for (std::uint64_t seed : {1ull, 2ull}) {
+    datasets::SyntheticOptions so;
+    so.preset = "exposure";
+    so.frames = 7;
+    so.seed = seed;
+    so.camera = PinholeCamera::preset("ros").scaled(1);
+    const datasets::SyntheticSequence seq(so);
+    const double true_gain = seq.frame(4).gain / seq.frame(5).gain;  // I_ref = gain I_cur
+    const test::FramePair pair = test::make_pair("exposure", 4, 5, true, seed);
+    const hf_transform12 T = to_transform12(pair.T_ref_cur_true);
+    const float estimated = estimate_brightness_gain(pair.current.levels[0], pair.reference.levels[0], T, 1.0f);
+    const float gain = estimate_brightness_gain(pair.current.levels[0], pair.reference.levels[0], T, 0.1f);
+    std::printf("exposure seed %d: gain %.4f (used %.4f), true %.4f\n", int(seed), estimated, gain, true_gain);
+    EXPECT_NEAR(estimated, true_gain, 0.02 * true_gain);
+    // A change of a few percent is within what the noise explains and is not used; a large one is.
+    if (std::abs(true_gain - 1.0) > 0.2) {
+      EXPECT_EQ(gain, estimated);
+    }
+    if (gain != 1.0f) {
+      EXPECT_EQ(gain, estimated);
+    }
+
+    RegistrationOptions constancy = default_registration_options("combined");
+    constancy.method_as<CombinedOptions>().photometric.brightness_gain = false;
+    const RegistrationResult c = align("combined", pair);
+    const RegistrationResult c0 =
+        make_registration("combined", constancy, make_backend("cpu"))->align(pair.current, pair.reference, SE3());
+    double best = 1e9;
+    for (const char* single : {"icp", "photometric"})
+      best = std::min(best, test::translation_error_m(align(single, pair).T_ref_cur, pair.T_ref_cur_true));
+    const double ec = test::translation_error_m(c.T_ref_cur, pair.T_ref_cur_true);
+    const double ec0 = test::translation_error_m(c0.T_ref_cur, pair.T_ref_cur_true);
+    std::printf("exposure seed %d: combined %.3f mm (constancy %.3f mm), best single %.3f mm\n", int(seed),
+                ec * 1e3, ec0 * 1e3, best * 1e3);
+    EXPECT_LT(ec, 1.5 * best);
+    EXPECT_LE(ec, ec0);
+  }
+  for (std::uint64_t seed : {1ull, 2ull}) {
+    const test::FramePair pair = test::make_pair("room", 5, 6, true, seed);
+    const hf_transform12 T = to_transform12(pair.T_ref_cur_true);
+    EXPECT_EQ(estimate_brightness_gain(pair.current.levels[0], pair.reference.levels[0], T, 0.1f), 1.0f);
+    // Without the test the estimate is the room's own (no change) within the noise.
+    EXPECT_NEAR(estimate_brightness_gain(pair.current.levels[0], pair.reference.levels[0], T, 1.0f), 1.0f, 0.01f);
+    RegistrationOptions constancy = default_registration_options("combined");
+    constancy.method_as<CombinedOptions>().photometric.brightness_gain = false;
+    const RegistrationResult c = align("combined", pair);
+    const RegistrationResult c0 =
+        make_registration("combined", constancy, make_backend("cpu"))->align(pair.current, pair.reference, SE3());
+    EXPECT_EQ(c.T_ref_cur.translation(), c0.T_ref_cur.translation());
+    EXPECT_EQ(c.iterations_per_level, c0.iterations_per_level);
+  }
+}
+
+// No intensity, or too few pairs: the gain is 1.
+TEST(Combined, BrightnessGainWithoutDataIsOne) {
+  const test::FramePair pair = test::make_pair("room", 5, 6, false);
+  FramePyramidLevel dark = pair.current.levels[0];
+  dark.intensity = IntensityImage();
+  const hf_transform12 T = to_transform12(SE3());
+  EXPECT_EQ(estimate_brightness_gain(dark, pair.reference.levels[0], T, 1.0f), 1.0f);
+  FramePyramidLevel empty = pair.current.levels[0];
+  for (auto& v : empty.vertices.pixels()) v = hf_make_float4(0.0f, 0.0f, 0.0f, 0.0f);
+  EXPECT_EQ(estimate_brightness_gain(empty, pair.reference.levels[0], T, 1.0f), 1.0f);
+}
+
 TEST(Combined, TermThresholdsAreValidated) {
   RegistrationOptions o = default_registration_options("combined");
   EXPECT_TRUE(o.set("icp_term_threshold", 0.05));
   EXPECT_NO_THROW(o.validate());
   EXPECT_TRUE(o.set("photometric_term_threshold", 1.0));
   EXPECT_THROW(o.validate(), Error);
+  RegistrationOptions p = default_registration_options("combined");
+  EXPECT_TRUE(p.set("icp_probe_step_m", 0.0));
+  EXPECT_THROW(p.validate(), Error);
+  RegistrationOptions g = default_registration_options("combined");
+  EXPECT_TRUE(g.set("brightness_gain_max_ratio", 1.5));
+  EXPECT_THROW(g.validate(), Error);
 }
 
 }  // namespace
