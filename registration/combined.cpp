@@ -86,18 +86,23 @@ NormalEquations combine_per_direction(const NormalEquations& icp, const NormalEq
 // corridor's axis the point-to-plane residuals do not change when the camera slides (every point meets the same
 // walls again), so the information there comes from the normals' noise and the residuals' noise, not from the
 // geometry: the cost stays flat while lambda says otherwise. Such a direction (observed / claimed below
-// icp_probe_min_ratio) is left out of icp's term. The result: the projector onto the directions kept.
-Matrix6d icp_observed_directions(const NormalEquations& icp, const Vector6d& unit_scale, const CombinedOptions& o,
+// icp_probe_min_ratio) is left out of icp's term where the photometric term constrains it (its information along
+// it at least icp_probe_photometric_ratio of its largest). The result: the projector onto the directions kept.
+Matrix6d icp_observed_directions(const NormalEquations& icp, const NormalEquations& photometric,
+                                 const Vector6d& unit_scale, const CombinedOptions& o,
                                  const DenseMethod::TermProbe& reduce_at, std::vector<IcpDirectionProbe>* probes) {
   Matrix6d keep = Matrix6d::Identity();
   if (probes) probes->clear();
   if (!(o.icp_probe_ratio > 0.0) || icp.count < 6) return keep;
   const Matrix6d H = unit_scale.asDiagonal() * icp.JtJ * unit_scale.asDiagonal();
-  if (!H.allFinite() || !std::isfinite(icp.cost)) return keep;
+  const Matrix6d Hp = unit_scale.asDiagonal() * photometric.JtJ * unit_scale.asDiagonal();
+  if (!H.allFinite() || !Hp.allFinite() || !std::isfinite(icp.cost)) return keep;
   const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(H);
   if (eig.info() != Eigen::Success) return keep;
   const double lmax = eig.eigenvalues()(5);
   if (!(lmax > 0.0)) return keep;
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig_p(Hp, Eigen::EigenvaluesOnly);
+  const double lp = eig_p.info() == Eigen::Success ? eig_p.eigenvalues()(5) : 0.0;
   const double c0 = icp.cost / double(icp.count);
   const double d = o.icp_probe_step_m;
   for (int k = 0; k < 5; ++k) {
@@ -112,9 +117,11 @@ Matrix6d icp_observed_directions(const NormalEquations& icp, const Vector6d& uni
                           double(icp.count);
     const double claimed = 2.0 * d * d * std::max(lambda, 0.0);
     const double observed_ratio = claimed > 0.0 ? second / claimed : 0.0;
-    const bool kept = observed_ratio >= o.icp_probe_min_ratio;
+    // Left out only where the photometric term sees that direction itself: else icp's little is all there is.
+    const double photometric_ratio = lp > 0.0 ? v.dot(Hp * v) / lp : 0.0;
+    const bool kept = observed_ratio >= o.icp_probe_min_ratio || photometric_ratio < o.icp_probe_photometric_ratio;
     if (!kept) keep -= v * v.transpose();
-    if (probes) probes->push_back({v, lambda / lmax, observed_ratio, kept});
+    if (probes) probes->push_back({v, lambda / lmax, observed_ratio, photometric_ratio, kept});
   }
   return keep;
 }
@@ -165,7 +172,7 @@ class CombinedMethod final : public DenseMethod {
   }
   void probe_terms(const std::vector<NormalEquations>& terms, const Vector6d& unit_scale,
                    const TermProbe& reduce_at) override {
-    icp_keep_ = icp_observed_directions(terms[0], unit_scale, options_, reduce_at, nullptr);
+    icp_keep_ = icp_observed_directions(terms[0], terms[1], unit_scale, options_, reduce_at, nullptr);
   }
 
  private:
@@ -198,6 +205,7 @@ void CombinedOptions::visit(OptionVisitor& v) {
   v("icp_probe_ratio", icp_probe_ratio);
   v("icp_probe_step_m", icp_probe_step_m);
   v("icp_probe_min_ratio", icp_probe_min_ratio);
+  v("icp_probe_photometric_ratio", icp_probe_photometric_ratio);
 }
 
 void CombinedOptions::validate() const {
@@ -214,6 +222,9 @@ void CombinedOptions::validate() const {
   require_option(std::isfinite(icp_probe_step_m) && icp_probe_step_m > 0.0, "icp_probe_step_m must be > 0");
   require_option(std::isfinite(icp_probe_min_ratio) && icp_probe_min_ratio >= 0.0,
                  "icp_probe_min_ratio must be >= 0");
+  require_option(std::isfinite(icp_probe_photometric_ratio) && icp_probe_photometric_ratio >= 0.0 &&
+                     icp_probe_photometric_ratio <= 1.0,
+                 "icp_probe_photometric_ratio must be in [0, 1]");
 }
 
 RegistrationMethod combined_registration_method() { return {"combined", defaults, make}; }

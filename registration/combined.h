@@ -36,14 +36,17 @@ struct CombinedOptions : MethodOptionsBase<CombinedOptions> {
   // The observed-information check of icp's weak directions (icp_observed_directions below), once per pyramid
   // level: icp's eigen-directions at or below icp_probe_ratio of its largest are probed at +-icp_probe_step_m
   // (balanced metres) and left out of icp's term where the cost's curvature is below icp_probe_min_ratio of the
-  // one its normal equations claim. 0: no check (the default). Measured (bench/results/registration.md,
-  // "combined: observed information, brightness gain"): with 0.05 / 5 mm / 0.5 the corridor pair goes from 9.7 to
-  // 1.8 mm (photometric 1.8 mm) and the corridor sequence from 14.3 to 9.6 mm, but TUM fr1/rpy 0-149 from 1.87 to
-  // 2.0-2.9 cm (its weak directions show 0.1-0.9 of their claimed curvature through the model raycast), so it is
-  // off by default.
+  // one its normal equations claim and the photometric term's information along them is at least
+  // icp_probe_photometric_ratio of its largest. 0: no check (the default). Measured (bench/results/registration.md,
+  // "combined: observed information, brightness gain"), ratio 0.05 / 5 mm / 0.5: corridor sequence 14.3 -> 9.6 mm
+  // (photometric 1.7 mm), TUM fr1/rpy 0-149 1.87 -> 2.39 cm without the photometric test, 1.89 cm with it at 0.05
+  // (0.07: 1.91 cm; 0.1 leaves nothing out on the corridor). TUM's weak directions show 0.1-0.9 of their claimed
+  // curvature through the model raycast, the corridor's axis -0.5-0.06: the classes overlap, so it is off by
+  // default. The corridor pair (frame to frame): 9.7 -> 1.8 mm, photometric 1.8 mm.
   double icp_probe_ratio = 0.0;
   double icp_probe_step_m = 0.005;
   double icp_probe_min_ratio = 0.5;
+  double icp_probe_photometric_ratio = 0.05;
 
   // Exposure: the photometric term's brightness gain (PhotometricOptions::brightness_gain) is on here: exposure
   // sequence 1.98 -> 0.73 mm (icp 1.00 mm), TUM fr1/rpy 0-149 1.870 -> 1.872 cm with max_ratio 0.1, where without
@@ -61,10 +64,12 @@ struct CombinedOptions : MethodOptionsBase<CombinedOptions> {
 struct IcpDirectionProbe {
   Vector6d direction;
   double eigen_ratio = 0.0;     // its eigenvalue over icp's largest
-  double observed_ratio = 0.0;  // the cost's second difference over the one the normal equations claim
+  double observed_ratio = 0.0;     // the cost's second difference over the one the normal equations claim
+  double photometric_ratio = 0.0;  // the photometric term's information along it over its largest
   bool kept = true;
 };
-Matrix6d icp_observed_directions(const NormalEquations& icp, const Vector6d& unit_scale, const CombinedOptions& o,
+Matrix6d icp_observed_directions(const NormalEquations& icp, const NormalEquations& photometric,
+                                 const Vector6d& unit_scale, const CombinedOptions& o,
                                  const DenseMethod::TermProbe& reduce_at, std::vector<IcpDirectionProbe>* probes);
 
 RegistrationMethod combined_registration_method();

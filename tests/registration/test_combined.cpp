@@ -113,8 +113,9 @@ std::vector<IcpDirectionProbe> probe_at_guess(const test::FramePair& pair, const
   const ResidualProblem level = m.dense->level_problem(pair.current, pair.reference, 0, at_pose);
   const ResidualProblem icp = m.dense->method().term_problem(0, level);
   const NormalEquations at = backend->reduce(icp);
+  const NormalEquations photometric = backend->reduce(m.dense->method().term_problem(1, level));
   std::vector<IcpDirectionProbe> probes;
-  icp_observed_directions(at, balanced_units(pair.current.levels[0].vertices), o,
+  icp_observed_directions(at, photometric, balanced_units(pair.current.levels[0].vertices), o,
                           [&](int, const Vector6d& xi) {
                             ResidualProblem moved = icp;
                             moved.T_ref_cur = to_transform12(SE3::exp(xi) * at_pose);
@@ -141,8 +142,8 @@ TEST(Combined, ObservedInformationLeavesOutCorridorDirectionsNotRoomOnes) {
   for (std::uint64_t seed : {1ull, 2ull}) {
     int left_out = 0;
     for (const IcpDirectionProbe& p : probe_at_guess(test::make_pair("corridor", 5, 6, true, seed), probing())) {
-      std::printf("corridor seed %d: eigen ratio %.4f observed %.3f kept %d\n", int(seed), p.eigen_ratio,
-                  p.observed_ratio, int(p.kept));
+      std::printf("corridor seed %d: eigen ratio %.4f observed %.3f photometric %.3f kept %d\n", int(seed),
+                  p.eigen_ratio, p.observed_ratio, p.photometric_ratio, int(p.kept));
       EXPECT_TRUE(std::isfinite(p.observed_ratio));
       left_out += p.kept ? 0 : 1;
     }
