@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "reg_test_util.h"
 #include "registration/combined.h"
+#include "registration/cpu_backend.h"
 #include "registration/gauss_newton.h"
 
 namespace hf {
@@ -238,6 +239,30 @@ TEST(Combined, ExposureGainIsEstimatedWhereItExplainsTheResidual) {
     EXPECT_EQ(c.T_ref_cur.translation(), c0.T_ref_cur.translation());
     EXPECT_EQ(c.iterations_per_level, c0.iterations_per_level);
   }
+}
+
+// The gain is in the photometric kernel, its AVX2 spelling and (same header) its OpenCL kernel: with a gain other
+// than 1 the vectorised rows are still the pixel loop's (1e-12 relative, as CpuBackend.VectorisedPathGivesThe-
+// PixelLoopsRows), and the gain changes the residuals (the cost moves).
+TEST(Combined, BrightnessGainRowsAgreeBetweenAvx2AndThePixelLoop) {
+  CpuReductionBackend simd(5, true), scalar(5, false);
+  if (!simd.vectorised()) GTEST_SKIP() << "this processor has no AVX2: only the pixel loop runs here";
+  const test::FramePair pair = test::make_pair("exposure", 4, 5, true, 2);
+  test::MethodUnderTest m = test::method_under_test("combined");
+  const ResidualProblem level = m.dense->level_problem(pair.current, pair.reference, 0, pair.T_ref_cur_true);
+  ResidualProblem p = m.dense->method().term_problem(1, level);
+  hf_photometric_params params = *static_cast<const hf_photometric_params*>(p.params);
+  p.params = &params;
+  params.gain = 1.0f;
+  const NormalEquations constancy = scalar.reduce(p);
+  params.gain = 1.37f;
+  const NormalEquations a = simd.reduce(p), b = scalar.reduce(p);
+  ASSERT_GT(b.count, 1000);
+  EXPECT_EQ(a.count, b.count);
+  EXPECT_LE((a.JtJ - b.JtJ).cwiseAbs().maxCoeff(), 1e-12 * b.JtJ.cwiseAbs().maxCoeff());
+  EXPECT_LE((a.Jtr - b.Jtr).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, b.Jtr.cwiseAbs().maxCoeff()));
+  EXPECT_NEAR(a.cost, b.cost, 1e-12 * std::max(1.0, b.cost));
+  EXPECT_GT(std::abs(b.cost - constancy.cost), 0.01 * constancy.cost);
 }
 
 // No intensity, or too few pairs: the gain is 1.
