@@ -48,7 +48,11 @@ struct ColourCheckOptions {
   double max_shift_fraction = 1.0 / 16.0;
   // A frame gives an estimate only with at least this fraction of its pixels on depth discontinuities (a frame of
   // one wall has none) and a best mean chamfer distance below max_chamfer_px (pixels of the level it runs on).
-  double min_edge_fraction = 0.0025;
+  // 0.0065 (500 pixels at 320x240): the synthetic loop's outward views of a wall with one or two straight contours
+  // (199-405 pixels) fit zooms of 0.78-0.84 with 15-20 px shifts, which judged its registered colour unregistered
+  // at 0.0025; the real sequences' estimates have 430-2100 (TUM) and 900-1900 (7-Scenes) and read the same medians
+  // at either value (bench/results/tracking.md, "Colour registration").
+  double min_edge_fraction = 0.0065;
   double max_chamfer_px = 2.5;
   // What tracks once the colour is judged unregistered: a registry method that reads no colour.
   std::string depth_only_registration = "icp";
@@ -64,6 +68,9 @@ struct ColourAlignment {
   double scale = 1.0;
   double shift_x_px = 0.0, shift_y_px = 0.0;
   double chamfer_px = 0.0;  // mean distance (truncated at 3 px) from the moved depth edges to intensity edges
+  // How much larger the best mean distance is at any scale 0.05 or more away from `scale`: how well the contours
+  // pin the zoom down (straight parallel contours fit any zoom with some shift).
+  double zoom_contrast_px = 0.0;
   long depth_edges = 0;     // depth-discontinuity pixels used
 };
 ColourAlignment estimate_colour_alignment(const FramePyramidLevel& level, const ColourCheckOptions& options);

@@ -304,6 +304,7 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
                                 {"scale", f.colour_alignment->scale},
                                 {"shift_px", {f.colour_alignment->shift_x_px, f.colour_alignment->shift_y_px}},
                                 {"chamfer_px", f.colour_alignment->chamfer_px},
+                                {"zoom_contrast_px", f.colour_alignment->zoom_contrast_px},
                                 {"depth_edges", f.colour_alignment->depth_edges}};
     frames.push_back(std::move(fj));
   }
