@@ -249,7 +249,7 @@ ColorImage render_speed_plot(const std::vector<SpeedPoint>& points, const SpeedP
       text(img, options.subtitle, {std::max(4, W / 2 - ss.width / 2), y}, font, kBlack);
     }
     int fy = H - int(12 * font / 0.55) - (footer_lines - 1) * (line_h + 12);
-    text(img, "disc: hashfusion method   square: PCL peer (frame-to-frame)   ringed, dashed: Pareto front "
+    text(img, "disc: hashfusion method   square: peer (PCL, Open3D; frame-to-frame)   ringed, dashed: Pareto front "
               "(lower left is better)", {area.x, fy}, font * 0.9, kAxis);
     if (!not_plotted.empty()) {
       std::string line = "not plotted (failed or lost): ";
