@@ -39,8 +39,8 @@ struct ColourCheckOptions {
   // 30 Hz, so a sequence with unregistered colour is tracked by depth alone from about its 30th frame.
   int window_estimates = 10;
   int frame_step = 3;
-  // |median s - 1| above this: unregistered. Chosen on TUM fr1/rpy frames 0-149 (registered: median 1.000) and
-  // 7-Scenes frames 0-99 (unregistered: 0.855); reported on fr1/rpy 150-269, fr1/desk, 7-Scenes 100-199 and the
+  // |median s - 1| above this: unregistered. Chosen on TUM fr1/rpy frames 0-149 (registered: median 0.994) and
+  // 7-Scenes frames 0-99 (unregistered: 0.906), about halfway; reported on fr1/rpy 150-269, fr1/desk, 7-Scenes 100-199 and the
   // synthetic room / unregistered presets (bench/results/tracking.md, "Colour registration").
   double max_scale_error = 0.05;
   // The search of the similarity: s in [1 / max_zoom, max_zoom], |t| <= max_shift_fraction of the image width.
