@@ -34,7 +34,7 @@ function(hf_test_common_flags name)
 endfunction()
 
 function(hf_test name)
-  cmake_parse_arguments(A "" "" "SOURCES;DEPS;LABELS" ${ARGN})
+  cmake_parse_arguments(A "" "" "SOURCES;DEPS;LABELS;ENVIRONMENT" ${ARGN})
   add_executable(${name} ${A_SOURCES})
   target_link_libraries(${name} PRIVATE ${A_DEPS} GTest::gtest_main)
   hf_test_common_flags(${name})
@@ -51,7 +51,15 @@ function(hf_test name)
     target_precompile_headers(${name} REUSE_FROM hf_test_pch)
   endif()
   include(GoogleTest)
-  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${A_LABELS}")
+  # ENVIRONMENT: VAR=value entries for the tests' processes (over the test preset's environment). An empty LABELS
+  # value is dropped by the discovery script, which would make ENVIRONMENT the label: name it only when set.
+  if(A_ENVIRONMENT AND A_LABELS)
+    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${A_LABELS}" ENVIRONMENT "${A_ENVIRONMENT}")
+  elseif(A_ENVIRONMENT)
+    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES ENVIRONMENT "${A_ENVIRONMENT}")
+  else()
+    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${A_LABELS}")
+  endif()
 endfunction()
 
 # hf_fuzzer(NAME SOURCES... DEPS ... [SECONDS n]): a libFuzzer target (clang, HF_FUZZ=ON) plus a CTest test that

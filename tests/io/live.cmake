@@ -14,7 +14,14 @@ if(TARGET hf_io_live)
   hf_test(test_io_tum_recorder SOURCES test_tum_recorder.cpp DEPS hf_io_live hf_io opencv_core opencv_imgcodecs)
 endif()
 if(TARGET hf_io_live)
-  hf_test(test_io_live_devices SOURCES test_live_devices.cpp DEPS hf_io_live hf_io)
+  # OpenNI2 unloads its drivers at exit with allocations outstanding; LeakSanitizer then reports them from an
+  # unloaded module, which no suppression in tests/lsan.supp can name (seen intermittently after the file driver's
+  # round trip): leak checking is off for this binary under the sanitizer preset; ASan's other checks stay on.
+  set(live_env "")
+  if(HF_SANITIZE)
+    set(live_env ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0:abort_on_error=1")
+  endif()
+  hf_test(test_io_live_devices SOURCES test_live_devices.cpp DEPS hf_io_live hf_io ${live_env})
   if(HF_OPENNI2_INCLUDE_DIR AND HF_OPENNI2_LIBRARY)
     target_include_directories(test_io_live_devices SYSTEM PRIVATE ${HF_OPENNI2_INCLUDE_DIR})
     target_link_libraries(test_io_live_devices PRIVATE ${HF_OPENNI2_LIBRARY})
