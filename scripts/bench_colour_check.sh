@@ -6,14 +6,8 @@
 # Writes OUT_DIR/colour_check.{md,json}.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-out="${1:-out/bench_colour_check}"
-hf="${HF_BIN:-build/release/apps/hashfusion}"
-shared="../shared/data"
-[[ -x "$hf" ]] || { echo "bench_colour_check: build first ($hf missing)" >&2; exit 1; }
-[[ -d "$shared" ]] || { echo "bench_colour_check: $shared is absent" >&2; exit 1; }
-mkdir -p "$out/runs"
-work="$(mktemp -d)"
-trap 'rm -rf "$work"' EXIT
+source scripts/bench_lib.sh
+bench_init bench_colour_check "${1:-out/bench_colour_check}"
 # 7-Scenes in two halves (folders of links; the reader takes any frame-NNNNNN run).
 seven="$(realpath "$shared/7scenes_tsdf_fusion_first200")"
 for part in "0 99" "100 199"; do
@@ -32,16 +26,11 @@ inputs=(
   "$work/7scenes_frames0_99" "$work/7scenes_frames100_199" "$seven" "synthetic:room" "synthetic:unregistered"
 )
 for input in "${inputs[@]}"; do
-  name="$(basename "$input")"
-  name="${name/synthetic:/synthetic_}"
+  name="$(bench_input_name "$input")"
   frames=()
   [[ "$name" == synthetic_* ]] && frames=(--synthetic-frames 120)
-  for mode in on off; do
-    args=(run --input "$input" --out "$out/runs/${name}__$mode" "${frames[@]}")
-    [[ "$mode" == off ]] && args+=(--config "$work/off.json")
-    echo "bench_colour_check: $name $mode" >&2
-    "$hf" "${args[@]}" > /dev/null 2> "$out/runs/${name}__$mode.log" || echo "  failed (see the log)" >&2
-  done
+  bench_run "${name}__on" "$input" "${frames[@]}"
+  bench_run "${name}__off" "$input" "${frames[@]}" --config "$work/off.json"
 done
 
 python3 - "$out" <<'PY'

@@ -4,17 +4,11 @@
 # The three methods run interleaved per input, so machine load affects them alike. Writes OUT_DIR/sdf_tracking.md.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-out="${1:-out/bench_sdf_tracking}"
-hf="${HF_BIN:-build/release/apps/hashfusion}"  # HF_BIN: a copy, so a rebuild mid-run changes nothing
-shared="../shared/data"
-[[ -x "$hf" ]] || { echo "bench_sdf_tracking: build first ($hf missing)" >&2; exit 1; }
-[[ -d "$shared" ]] || { echo "bench_sdf_tracking: $shared is absent" >&2; exit 1; }
-mkdir -p "$out/runs"
+source scripts/bench_lib.sh
+bench_init bench_sdf_tracking "${1:-out/bench_sdf_tracking}"
 for input in tum_fr1_rpy_first150 tum_fr1_rpy_frames150_269 tum_fr1_desk_9frames 7scenes_tsdf_fusion_first200; do
   for method in sdf combined icp; do
-    echo "bench_sdf_tracking: $input $method" >&2
-    "$hf" run --input "$shared/$input" --out "$out/runs/${input}__$method" --registration "$method" \
-      > /dev/null 2> "$out/runs/${input}__$method.log" || echo "  failed (see the log)" >&2
+    bench_run "${input}__$method" "$shared/$input" --registration "$method"
   done
 done
 python3 - "$out" "$(uptime)" <<'PY'

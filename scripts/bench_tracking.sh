@@ -5,14 +5,8 @@
 # fr1/rpy frames 0-269 are the two shared excerpts joined into one folder of links (they are contiguous).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-out="${1:-out/bench_tracking}"
-hf="build/release/apps/hashfusion"
-shared="../shared/data"
-[[ -x "$hf" ]] || { echo "bench_tracking: build first ($hf missing)" >&2; exit 1; }
-[[ -d "$shared" ]] || { echo "bench_tracking: $shared is absent" >&2; exit 1; }
-mkdir -p "$out/runs"
-work="$(mktemp -d)"
-trap 'rm -rf "$work"' EXIT
+source scripts/bench_lib.sh
+bench_init bench_tracking "${1:-out/bench_tracking}"
 
 # fr1/rpy 0-269 from the two excerpts.
 joined="$work/tum_fr1_rpy_frames0_269"
@@ -39,18 +33,13 @@ inputs=(
   "synthetic:kidnap"
 )
 for input in "${inputs[@]}"; do
-  name="$(basename "$input")"
-  name="${name/synthetic:/synthetic_}"
+  name="$(bench_input_name "$input")"
   frames=()
   [[ "$name" == synthetic_loop ]] && frames=(--synthetic-frames 250)
   [[ "$name" == synthetic_kidnap ]] && frames=(--synthetic-frames 95)
-  for mode in off on global; do
-    args=(run --input "$input" --out "$out/runs/${name}__$mode" "${frames[@]}")
-    [[ "$mode" == off ]] && args+=(--config "$work/off.json")
-    [[ "$mode" == global ]] && args+=(--global)
-    echo "bench_tracking: $name $mode" >&2
-    "$hf" "${args[@]}" > /dev/null 2> "$out/runs/${name}__$mode.log" || echo "  failed (see the log)" >&2
-  done
+  bench_run "${name}__off" "$input" "${frames[@]}" --config "$work/off.json"
+  bench_run "${name}__on" "$input" "${frames[@]}"
+  bench_run "${name}__global" "$input" "${frames[@]}" --global
 done
 
 python3 - "$out" <<'EOF'

@@ -186,6 +186,7 @@ RpeResult evaluate_rpe(const Trajectory& gt, const Trajectory& est, const RpeOpt
     throw Error("RPE: delta must be a positive number of seconds, got " + std::to_string(options.delta_s));
   }
   if (!std::isfinite(options.offset_s)) throw Error("RPE: time offset must be finite");
+  if (options.delta_frames < 0) throw Error("RPE: delta in frames must be >= 0, got " + std::to_string(options.delta_frames));
   RpeResult result;
   result.delta_s = options.delta_s;
   if (gt.size() < 2 || est.size() < 2) return result;
@@ -198,8 +199,11 @@ RpeResult evaluate_rpe(const Trajectory& gt, const Trajectory& est, const RpeOpt
 
   std::vector<double> trans, rot;
   const size_t last = est.size() - 1;
+  const bool in_frames = options.delta_frames > 0;
+  const double divisor = in_frames ? static_cast<double>(options.delta_frames) : options.delta_s;
   for (size_t i = 0; i < est.size(); ++i) {
-    const size_t j = find_closest_index(stamps_est, stamps_est[i] + options.delta_s);
+    const size_t j = in_frames ? std::min(i + static_cast<size_t>(options.delta_frames), last)
+                               : find_closest_index(stamps_est, stamps_est[i] + options.delta_s);
     if (j == last) continue;
     const double query_0 = stamps_est[i] + options.offset_s, query_1 = stamps_est[j] + options.offset_s;
     const size_t g0 = find_closest_index(stamps_gt, query_0), g1 = find_closest_index(stamps_gt, query_1);
@@ -221,8 +225,8 @@ RpeResult evaluate_rpe(const Trajectory& gt, const Trajectory& est, const RpeOpt
                  .est_stamp_1_s = stamps_est[j],
                  .gt_stamp_0_s = stamps_gt[g0],
                  .gt_stamp_1_s = stamps_gt[g1],
-                 .trans_m_per_s = error.translation().norm() / options.delta_s,
-                 .rot_deg_per_s = rotation_angle_rad(error.quaternion()) * 180.0 / std::numbers::pi / options.delta_s};
+                 .trans_m_per_s = error.translation().norm() / divisor,
+                 .rot_deg_per_s = rotation_angle_rad(error.quaternion()) * 180.0 / std::numbers::pi / divisor};
     trans.push_back(pair.trans_m_per_s);
     rot.push_back(pair.rot_deg_per_s);
     result.pairs.push_back(pair);

@@ -108,13 +108,17 @@ Trajectory apply_alignment(const Trajectory& est, const SE3& T_gt_est);
 struct RpeOptions {
   double delta_s = 1.0;   // evaluate_rpe.py --delta (unit s)
   double offset_s = 0.0;  // evaluate_rpe.py --offset, added to the estimate's stamps
+  // > 0: the script's --delta_unit f instead: pairs (i, i + delta_frames) of ESTIMATED poses (its index list is
+  // range(len(traj_est)), so j = min(i + delta_frames, last) and the pair is kept unless j is the last pose), and
+  // the errors divided by delta_frames (per frame) rather than by delta_s. Otherwise as above.
+  int delta_frames = 0;
 };
 
 struct RpePair {
   size_t est_index_0 = 0, est_index_1 = 0, gt_index_0 = 0, gt_index_1 = 0;
   double est_stamp_0_s = 0.0, est_stamp_1_s = 0.0, gt_stamp_0_s = 0.0, gt_stamp_1_s = 0.0;
-  double trans_m_per_s = 0.0;  // |t(error)| / delta_s
-  double rot_deg_per_s = 0.0;  // angle(error) in degrees / delta_s
+  double trans_m_per_s = 0.0;  // |t(error)| / delta_s (/ delta_frames in frame units: metres per frame)
+  double rot_deg_per_s = 0.0;  // angle(error) in degrees / delta_s (/ delta_frames: degrees per frame)
 };
 
 struct RpeResult {
@@ -127,7 +131,7 @@ struct RpeResult {
 };
 
 // Never throws for short or non-overlapping trajectories (the result is then empty); throws hf::Error only for
-// a non-finite or non-positive delta_s or a non-finite offset_s.
+// a non-finite or non-positive delta_s, a negative delta_frames or a non-finite offset_s.
 RpeResult evaluate_rpe(const Trajectory& gt, const Trajectory& est, const RpeOptions& options = {});
 
 // The numbers a report embeds: plain values, no I/O. RPE fields are absent (nullopt) when there is no RPE pair.

@@ -12,13 +12,12 @@
 //   - error = ominus(ominus(E_j, E_i), ominus(G_j, G_i)) with ominus(a, b) = a^-1 b; trans = |t(error)| in metres,
 //     rot = its angle in degrees, per frame pair (not divided by any time: the script's unit is "per frame").
 // A pair spans a gap of lost frames where the estimate has one (the script works on the estimate file's poses).
+// slam/eval.h's evaluate_rpe in frame units (RpeOptions::delta_frames = 1) computes it; this names the result.
 // Statistics: hf::ErrorStats (numpy semantics). Pure function; never throws (too few poses: empty).
 #pragma once
 
 #include <algorithm>
-#include <cmath>
 #include <cstddef>
-#include <numbers>
 #include <vector>
 
 #include "io/trajectory_io.h"
@@ -34,46 +33,18 @@ struct FrameRpe {
 };
 
 inline FrameRpe evaluate_rpe_per_frame(const Trajectory& gt_in, const Trajectory& est_in) {
-  FrameRpe result;
-  if (gt_in.size() < 2 || est_in.size() < 3) return result;
-  // The script sorts both stamp lists.
+  // The script sorts both stamp lists; slam/eval.h's RPE reads them in the given order.
   auto sorted_by_stamp = [](Trajectory t) {
     std::stable_sort(t.begin(), t.end(),
                      [](const StampedPose& a, const StampedPose& b) { return a.timestamp_s < b.timestamp_s; });
     return t;
   };
-  const Trajectory gt = sorted_by_stamp(gt_in), est = sorted_by_stamp(est_in);
-  std::vector<double> stamps_gt;
-  stamps_gt.reserve(gt.size());
-  for (const StampedPose& p : gt) stamps_gt.push_back(p.timestamp_s);
-  std::vector<double> intervals;
-  for (size_t k = 1; k < stamps_gt.size(); ++k) intervals.push_back(stamps_gt[k] - stamps_gt[k - 1]);
-  std::sort(intervals.begin(), intervals.end());
-  const size_t m = intervals.size();
-  const double median = m % 2 == 1 ? intervals[m / 2] : intervals[m / 2 - 1] * 0.5 + intervals[m / 2] * 0.5;
-  const double max_difference_s = 2.0 * median;
-
-  std::vector<double> trans, rot;
-  // j = i + 1 for every i whose partner is not the last pose (find_closest_index over 0..n-1 of i + 1).
-  for (size_t i = 0; i + 2 < est.size(); ++i) {
-    const size_t j = i + 1;
-    const double t0 = est[i].timestamp_s, t1 = est[j].timestamp_s;
-    const size_t g0 = find_closest_index(stamps_gt, t0), g1 = find_closest_index(stamps_gt, t1);
-    if (std::fabs(stamps_gt[g0] - t0) > max_difference_s || std::fabs(stamps_gt[g1] - t1) > max_difference_s) {
-      ++result.rejected_gap_pairs;
-      continue;
-    }
-    const SE3& E0 = est[i].T_world_camera;
-    const SE3& E1 = est[j].T_world_camera;
-    const SE3& G0 = gt[g0].T_world_camera;
-    const SE3& G1 = gt[g1].T_world_camera;
-    const SE3 error = (E1.inverse() * E0).inverse() * (G1.inverse() * G0);
-    trans.push_back(error.translation().norm());
-    rot.push_back(rotation_angle_rad(error.quaternion()) * 180.0 / std::numbers::pi);
-  }
-  result.pairs = trans.size();
-  result.trans_m = compute_error_stats(trans);
-  result.rot_deg = compute_error_stats(rot);
+  const RpeResult rpe = evaluate_rpe(sorted_by_stamp(gt_in), sorted_by_stamp(est_in), {.delta_frames = 1});
+  FrameRpe result;
+  result.pairs = rpe.pairs.size();
+  result.rejected_gap_pairs = rpe.rejected_gap_pairs;
+  result.trans_m = rpe.trans_m_per_s;  // per frame: delta_frames = 1
+  result.rot_deg = rpe.rot_deg_per_s;
   return result;
 }
 

@@ -283,6 +283,22 @@ TEST(Rpe, ConstantVelocityIsExactAndSpeedErrorIsMetresPerSecond) {
   EXPECT_NEAR(fast2.trans_m_per_s.mean, 0.1, 1e-9);
 }
 
+// --delta_unit f: pairs (i, i + delta_frames) of estimated poses, errors per frame. At 30 Hz a 0.1 m/s speed error
+// is 0.1 / 30 m per frame; with delta 3 frames the pair sees 3 frames of drift and divides by 3.
+TEST(Rpe, FrameUnitsPairEstimatedPosesByIndexAndReportPerFrame) {
+  const Trajectory gt = line(0.5);
+  for (int delta : {1, 3}) {
+    const RpeResult r = evaluate_rpe(gt, line(0.6), {.delta_frames = delta});
+    // 91 poses: i + delta must stay below the last index 90.
+    ASSERT_EQ(r.pairs.size(), size_t(90 - delta)) << delta;
+    for (const RpePair& p : r.pairs) {
+      EXPECT_EQ(p.est_index_1, p.est_index_0 + size_t(delta));
+      EXPECT_NEAR(p.trans_m_per_s, 0.1 / 30.0, 1e-9);
+    }
+  }
+  EXPECT_THROW(evaluate_rpe(gt, gt, {.delta_frames = -1}), Error);
+}
+
 TEST(Rpe, YawRateErrorIsDegreesPerSecond) {
   const Trajectory gt = line(0.0, 10.0 * kDeg);
   const RpeResult r = evaluate_rpe(gt, line(0.0, 13.0 * kDeg));
