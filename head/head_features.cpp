@@ -80,6 +80,12 @@ HeadFeatureResult detect_head_features(const TriangleMesh& mesh, const HeadFeatu
     StageTimer t(r.stage_ms, "head_frame");
     r.frame = find_head_frame(mesh, r.topology, options.frame);
   }
+  const double rho = r.frame.cap_scale;
+  if (options.evaluation_sigma_rho > 0) {
+    StageTimer t(r.stage_ms, "physical_scale");
+    smooth_at_scale(mesh, r.topology, options.evaluation_sigma_rho * rho, r.discrete);
+    smooth_at_scale(mesh, r.topology, options.evaluation_sigma_rho * rho, r.laplace.valid, {&r.laplace.magnitude});
+  }
   {
     StageTimer t(r.stage_ms, "important_areas");
     r.areas = find_important_areas(mesh, r.topology, r.discrete, r.frame, options.areas);
@@ -94,7 +100,10 @@ HeadFeatureResult detect_head_features(const TriangleMesh& mesh, const HeadFeatu
         only[i] = a == Area::eye_left || a == Area::eye_right || a == Area::ear_left || a == Area::ear_right;
       }
     }
-    r.mls = mls_curvature(mesh, r.topology, options.mls, only);
+    MlsOptions mls = options.mls;
+    if (options.mls_h_rho > 0) mls.h = options.mls_h_rho * rho;
+    r.mls = mls_curvature(mesh, r.topology, mls, only);
+    if (options.evaluation_sigma_rho > 0) smooth_at_scale(mesh, r.topology, options.evaluation_sigma_rho * rho, r.mls);
   }
   {
     StageTimer t(r.stage_ms, "features");

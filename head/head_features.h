@@ -37,6 +37,16 @@ struct HeadFeatureOptions {
   MlsOptions mls;
   HeadFrameOptions frame;
   ImportantAreaOptions areas;
+  // Physical scale, in rho (head_frame.h: 0.17 x the surface's RMS radius, ~2 cm on a head): > 0 smooths every
+  // vertex evaluation (discrete, Laplace-Beltrami, MLS) over a Gaussian of sigma = evaluation_sigma_rho x rho
+  // (curvature.h's smooth_at_scale), and mls_h_rho > 0 sets the MLS fit's h to mls_h_rho x rho (mls_curvature.h).
+  // With areas.k_rho they make every scale of the method a length on the head rather than a count of vertices or
+  // rings, for meshes of one head at different densities or noise (a fused head against its source). 0 (the
+  // default): the paper's scales (1-ring operators, MLS over 3 rings with h the 1-ring edge), on which the
+  // real-head tests were chosen. PhysicalScale() below is the setting chosen on the fused libigl head
+  // (bench/results/head.md, "End to end").
+  double evaluation_sigma_rho = 0.0;
+  double mls_h_rho = 0.0;
 };
 
 struct HeadFeatureResult {

@@ -178,7 +178,10 @@ ImportantAreas find_important_areas(const TriangleMesh& mesh, const MeshTopology
   out.features = threshold(discrete.mean, discrete.valid, static_cast<float>(out.threshold),
                            std::numeric_limits<float>::max());
   // Step 2.
-  out.k = options.k > 0 ? options.k : paper_k_for_vertex_count(n);
+  out.k = options.k > 0 ? options.k
+          : options.k_rho > 0 && frame.mean_edge_length > 0
+              ? std::max(1, static_cast<int>(std::lround(options.k_rho * frame.cap_scale / frame.mean_edge_length)))
+              : paper_k_for_vertex_count(n);
   std::vector<MorphologyStep> steps = {
       {MorphologyOp::close, out.k}, {MorphologyOp::open, out.k}, {MorphologyOp::close, out.k}};
   if (options.final_dilation) steps.push_back({MorphologyOp::dilate, out.k});
@@ -208,8 +211,24 @@ ImportantAreas find_important_areas(const TriangleMesh& mesh, const MeshTopology
   }
   out.z_eyes_nose = 0.5 * z_at_widest;   // halfway between the widest point and the tip (z = 0)
   out.z_nose_lips = (2.0 / 3.0) * z_min;  // two thirds of the way from the tip to the lowest point
-  // Method 2's nose box: the root is the deepest profile vertex between the tip and the eyes/nose boundary.
   const double band = 1.5;  // head units are mean edge lengths: the profile band of head_frame.h
+  {
+    double y_min = 0;
+    for (int i = 0; i < n; ++i)
+      if (std::abs(ph[i].x()) < band && ph[i].z() > 0 && ph[i].z() <= 2.5 * rho && ph[i].norm() < 3.0 * rho)
+        y_min = std::min(y_min, ph[i].y());
+    double z_sum = 0;
+    int count = 0;
+    for (int i = 0; i < n; ++i)
+      if (std::abs(ph[i].x()) < band && ph[i].z() > 0 && ph[i].z() <= 2.5 * rho && ph[i].norm() < 3.0 * rho &&
+          ph[i].y() <= y_min + 0.05 * rho) {
+        z_sum += ph[i].z();
+        ++count;
+      }
+    out.z_root = count > 0 ? z_sum / count : 0;
+    if (options.root_fraction > 0 && count > 0) out.z_eyes_nose = options.root_fraction * out.z_root;
+  }
+  // Method 2's nose box: the root is the deepest profile vertex between the tip and the eyes/nose boundary.
   double y_root = 0;
   for (int i = 0; i < n; ++i)
     if (std::abs(ph[i].x()) < band && ph[i].z() > 0 && ph[i].z() <= out.z_eyes_nose && ph[i].y() < y_root &&
@@ -220,6 +239,8 @@ ImportantAreas find_important_areas(const TriangleMesh& mesh, const MeshTopology
     if (coarse[i] == Area::nose && ph[i].z() > out.z_nose_lips && ph[i].z() <= out.z_eyes_nose &&
         ph[i].y() >= y_root && std::abs(ph[i].x()) < 1.5 * rho)
       nose_half_width = std::max(nose_half_width, std::abs(ph[i].x()));
+  out.y_root = y_root;
+  out.nose_half_width = nose_half_width;
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d& p = ph[i];
     if (options.separation_method == 2 && p.z() > out.z_nose_lips && p.z() <= out.z_eyes_nose && p.y() >= y_root &&

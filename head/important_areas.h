@@ -36,7 +36,14 @@ constexpr int kAreaCount = 7;
 const char* area_name(Area a);
 
 struct ImportantAreaOptions {
-  int k = 0;              // 0: the paper's choice by vertex count (5 / 10 / 15)
+  int k = 0;              // 0: the paper's choice by vertex count (5 / 10 / 15), unless k_rho says otherwise
+  // > 0 (and k = 0): k at a physical scale, round(k_rho x rho / mean edge length) (head_frame.h's rho and edge),
+  // so the morphology spans the same extent on meshes of one head at different vertex densities.
+  double k_rho = 0.0;
+  // > 0: the eyes/nose boundary at root_fraction x the nose root's height above the tip instead of step 4's half
+  // the height of the face area's widest feature. The widest feature is one vertex, an extreme of a set that on a
+  // noisy (fused) mesh reaches the face box's sides at any height; the root is a minimum of the profile, averaged.
+  double root_fraction = 0.0;
   bool final_dilation = true;
   int separation_method = 2;  // 1 or 2 (section 3.3)
 };
@@ -49,6 +56,9 @@ struct ImportantAreas {
   double threshold = 0;     // mean H used in step 1 (1 / mesh unit)
   // Boundaries in head-frame z (mean edge lengths below/above the tip).
   double z_eyes_nose = 0, z_nose_lips = 0;
+  // The nose root (nasion): the profile's deepest point 0 .. 2.5 rho above the tip (z: the mean over the profile
+  // vertices within 0.05 rho of the deepest y), and method 2's nose half-width; head units.
+  double z_root = 0, y_root = 0, nose_half_width = 0;
   std::array<int, kAreaCount> counts{};
   // Per area, why it is absent or how it was found when not by the steps above (empty otherwise): an ear side
   // without an ear-like flap (hair, not scanned), the eyes' fallback band on a mesh whose morphology removed them.

@@ -1,6 +1,7 @@
 #include "head/mls_curvature.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <tbb/parallel_for.h>
 
@@ -126,7 +127,12 @@ VertexCurvatures mls_curvature(const TriangleMesh& mesh, const MeshTopology& top
       for (const int* j = topology.ring_begin(i); j != topology.ring_end(i); ++j)
         h += (mesh.vertices[*j] - mesh.vertices[i]).cast<double>().norm();
       h /= topology.degree(i);
-      walker.collect(i, k, ring);
+      int rings = k;
+      if (options.h > 0.0) {
+        rings = std::max(k, std::min(64, static_cast<int>(std::ceil(2.0 * options.h / (0.75 * h)))));
+        h = options.h;
+      }
+      walker.collect(i, rings, ring);
       const LocalFit fit = fit_vertex(mesh.vertices, i, ring, normals[i].cast<double>(), h);
       if (!fit.ok) continue;
       c.mean[i] = static_cast<float>(fit.H);

@@ -26,6 +26,10 @@ namespace hf::head {
 
 struct MlsOptions {
   int k = 3;  // neighbourhood rings: the paper's usual choice (1 and 2 rings give a poor surface, section 3.1.2)
+  // > 0: the fit at a physical scale (mesh units) instead of the mesh's: h = this instead of the mean 1-ring edge,
+  // and N^k grown until it reaches 2 h (k >= 2 h / (0.75 x the vertex's mean 1-ring edge)), so two meshes of one
+  // surface at different vertex densities fit over the same extent. 0: the paper's rule above.
+  double h = 0.0;
 };
 
 // Evaluates every vertex, or only those with only[i] != 0 when `only` is non-empty (the automatic detection needs
