@@ -922,6 +922,7 @@ void raycast_pixels(const VoxelBlockGrid& grid, const PinholeCamera& camera, con
   if (rays != nullptr && (rays->width() != W || rays->height() != H))
     throw Error("raycast: the ray mask is " + std::to_string(rays->width()) + "x" + std::to_string(rays->height()) +
                 " but the camera is " + camera.describe());
+  out->device_copies.clear();  // the images are written here, in place: a device's copies no longer mirror them
   ensure_size(&out->depth, W, H);
   ensure_size(&out->vertices, W, H);
   ensure_size(&out->normals, W, H);

@@ -60,6 +60,12 @@ const std::vector<float>& raw_evaluation(const HeadFeatureResult& r, const HeadF
   return r.discrete.mean;
 }
 
+void use_physical_scale(HeadFeatureOptions& options) {
+  options.evaluation_sigma_rho = 0.05;
+  options.mls_h_rho = 0.5;
+  options.areas.root_fraction = 0.3;
+}
+
 HeadFeatureResult detect_head_features(const TriangleMesh& mesh, const HeadFeatureOptions& options) {
   HeadFeatureResult r;
   {

@@ -18,6 +18,8 @@
 #include <limits>
 #include <map>
 #include <cmath>
+#include <numbers>
+#include <Eigen/Geometry>
 
 #include "datasets/mesh_orbit.h"
 #include "fusion/integrate.h"
@@ -51,9 +53,10 @@ struct Outcome {
   }
 };
 
-HeadFeatureOptions automatic() {
+HeadFeatureOptions automatic(bool physical) {
   HeadFeatureOptions o;
   o.automatic = true;
+  if (physical) use_physical_scale(o);
   return o;
 }
 
@@ -68,9 +71,12 @@ struct Config {
   // A second ring of as many frames at this elevation (NaN: none), seeing what the first ring cannot (from 10 degrees
   // above: the nose's and the chin's undersides, the nostrils).
   double second_elevation_deg = std::numeric_limits<double>::quiet_NaN();
+  double second_sweep_deg = 360.0;  // the second ring's arc, centred on the face
+  bool physical = false;  // head_features.h's use_physical_scale() on both meshes, else the paper's scales
 };
 
-Outcome reconstruct(const TriangleMesh& source, const HeadFeatureResult& on_source, const Config& config) {
+Outcome reconstruct(const TriangleMesh& source, const Config& config) {
+  const HeadFeatureResult on_source = detect_head_features(source, automatic(config.physical));
   const double voxel_m = config.voxel_m;
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (const auto& v : source.vertices) centroid += v.cast<double>();
@@ -110,13 +116,19 @@ Outcome reconstruct(const TriangleMesh& source, const HeadFeatureResult& on_sour
     datasets::MeshOrbitOptions below = orbit;
     below.elevation_deg = config.second_elevation_deg;
     below.seed = orbit.seed + 1;  // other noise than the first ring's
+    below.sweep_deg = config.second_sweep_deg;
+    if (config.second_sweep_deg < 360.0) {  // start half the arc to the side of the face
+      const double a = -0.5 * config.second_sweep_deg * std::numbers::pi / 180.0;
+      const Eigen::Vector3d up = orbit.up_world.normalized();
+      below.start_world = Eigen::AngleAxisd(a, up) * orbit.start_world;
+    }
     for (int i = 0; i < config.frames; ++i) {
       const datasets::SyntheticFrame f = datasets::mesh_orbit_frame(world, below, i);
       fusion::integrate(grid, f.depth, f.color, below.camera, f.T_world_camera, integrate);
     }
   }
   const TriangleMesh fused = fusion::extract_mesh(grid);
-  const HeadFeatureResult on_fused = detect_head_features(fused, automatic());
+  const HeadFeatureResult on_fused = detect_head_features(fused, automatic(config.physical));
   if (const char* dir = std::getenv("HF_HEAD_E2E_WRITE")) {  // both meshes, for `hashfusion head-features` and a look
     write_ply(std::string(dir) + "/fused.ply", fused);
     write_ply(std::string(dir) + "/source_m.ply", world);
@@ -146,6 +158,16 @@ Outcome reconstruct(const TriangleMesh& source, const HeadFeatureResult& on_sour
   }
   std::printf("  rho source %.2f mm, fused %.2f mm; edge source %.2f mm, fused %.2f mm\n", 1e3 * scale * on_source.frame.cap_scale,
               1e3 * on_fused.frame.cap_scale, 1e3 * scale * on_source.frame.mean_edge_length, 1e3 * on_fused.frame.mean_edge_length);
+  for (const HeadFeatureResult* r : {&on_source, &on_fused}) {
+    const double mm = 1e3 * (r == &on_source ? scale : 1.0) / r->frame.scale;  // head units -> mm
+    std::printf("  %s: k %d, root z %.1f y %.1f, nose half-width %.1f, z eyes/nose %.1f mm, nose/lips %.1f mm, areas eyes %d/%d nose %d lips %d, features %d/%d/%d/%d\n",
+                r == &on_source ? "source" : "fused", r->areas.k, r->areas.z_root * mm, r->areas.y_root * mm, r->areas.nose_half_width * mm, r->areas.z_eyes_nose * mm, r->areas.z_nose_lips * mm,
+                r->areas.counts[1], r->areas.counts[2], r->areas.counts[3], r->areas.counts[4],
+                [&] { int c = 0; for (size_t i = 0; i < r->areas.label.size(); ++i) c += r->areas.label[i] == Area::eye_right && r->area_features.features[i]; return c; }(),
+                [&] { int c = 0; for (size_t i = 0; i < r->areas.label.size(); ++i) c += r->areas.label[i] == Area::eye_left && r->area_features.features[i]; return c; }(),
+                [&] { int c = 0; for (size_t i = 0; i < r->areas.label.size(); ++i) c += r->areas.label[i] == Area::nose && r->area_features.features[i]; return c; }(),
+                [&] { int c = 0; for (size_t i = 0; i < r->areas.label.size(); ++i) c += r->areas.label[i] == Area::lips && r->area_features.features[i]; return c; }());
+  }
   out.source_points = int(on_source.control_points.size()), out.fused_points = int(on_fused.control_points.size());
   std::map<std::string, Eigen::Vector3d> expected;
   for (const ControlPoint& c : on_source.control_points) expected[c.name] = to_world(c.position);
@@ -158,9 +180,9 @@ Outcome reconstruct(const TriangleMesh& source, const HeadFeatureResult& on_sour
 }
 
 void print(const char* what, const Config& c, const Outcome& o) {
-  std::printf("%s: %.1f mm voxels, %d frames, %s, incidence <= %.0f deg, elevation %.0f +- %.0f deg (second ring %.0f): fused %zu vertices, frame axes cos %.2f %.2f %.2f, "
+  std::printf("%s: %s scales, %.1f mm voxels, %d frames, %s, incidence <= %.0f deg, elevation %.0f +- %.0f deg (second ring %.0f over %.0f deg): fused %zu vertices, frame axes cos %.2f %.2f %.2f, "
               "control points %d (source %d), matched %zu, nose tip %.2f vox, median %.2f vox, within 2 vox %.0f %%\n",
-              what, c.voxel_m * 1e3, c.frames, c.noise ? "Kinect noise" : "no noise", c.max_incidence_deg, c.elevation_deg, c.swing_deg, c.second_elevation_deg, o.fused_vertices,
+              what, c.physical ? "physical" : "paper's", c.voxel_m * 1e3, c.frames, c.noise ? "Kinect noise" : "no noise", c.max_incidence_deg, c.elevation_deg, c.swing_deg, c.second_elevation_deg, c.second_sweep_deg, o.fused_vertices,
               o.axis_cos.x(), o.axis_cos.y(), o.axis_cos.z(), o.fused_points, o.source_points, o.distance_vox.size(), o.nose_tip_vox,
               o.median_vox(), 100 * o.fraction_within(2.0));
   std::map<std::string, std::vector<double>> groups;  // by area: eye_right, lips, nose, ...
@@ -173,33 +195,89 @@ void print(const char* what, const Config& c, const Outcome& o) {
   for (const auto& [name, d] : o.distance_vox) std::printf("    %-24s %6.2f vox\n", name.c_str(), d);
 }
 
+// Per area ("eye_right", "lips", ...), the median distance in voxels.
+std::map<std::string, double> group_medians(const Outcome& o) {
+  std::map<std::string, std::vector<double>> groups;
+  for (const auto& [name, d] : o.distance_vox) groups[name.substr(0, name.find('.'))].push_back(d);
+  std::map<std::string, double> out;
+  for (auto& [g, d] : groups) {
+    std::sort(d.begin(), d.end());
+    out[g] = d[d.size() / 2];
+  }
+  return out;
+}
+
+// The target: the two-ring capture (10 degrees above all round, 30 degrees below over a 120 degree arc in
+// front of the face: the nose's and lips' undersides) and head_features.h's physical scales on both meshes. Chosen
+// here, on this configuration (libigl's head, 3 mm voxels, 18 + 18 frames, Kinect noise seeds 0 and 1);
+// reported on the others of bench/results/head.md (2 / 2.5 / 4 mm, 36 frames, a -20 degree ring, one ring).
 TEST(HeadReconstruction, FusedControlPointsMatchTheSource) {
   if (!std::filesystem::exists(kMesh)) GTEST_SKIP() << kMesh << " is absent (../shared not mounted)";
   const TriangleMesh source = read_mesh_file(kMesh);
-  const HeadFeatureResult on_source = detect_head_features(source, automatic());
-  ASSERT_EQ(on_source.control_points.size(), control_point_names().size());
-
-  const Config config;  // 3 mm voxels, 18 frames, Kinect noise, incidence <= 70 degrees, 10 degrees above
-
-  const Outcome o = reconstruct(source, on_source, config);
+  Config config;
+  config.second_elevation_deg = -30.0;
+  config.second_sweep_deg = 120.0;
+  config.physical = true;
+  const Outcome o = reconstruct(source, config);
   print("test", config, o);
-  // Measured (bench/results/head.md, with every point's distance): the frame's axes agree within 16 degrees, the
-  // nose tip lies 0.5 voxel from the source's, the median control point 3.9 voxels, 28 % within 2 voxels; the
-  // fused ears are reported absent (their flaps span 0.55 / 0.70 rho: the TSDF thickens the pinna, the ear test
-  // needs 1 rho), so 40 of 52 points are compared. The bounds leave room for noise realisations but catch a wrong
-  // frame (a wrong tip is > 20 voxels off, a flipped z has cosine -1). The 2-voxel target holds for the
-  // tip, not for the other control points.
+  // Measured: frame cosines 1.00, nose tip 0.59 voxel, 47 of 52 points matched (the fused right ear is reported
+  // absent; a left flap is found and its 5 points lie ~24 voxels off: the fused pinna is not the source's ear),
+  // median 1.69 voxels, 62 % within 2; per area eyes 1.09 / 0.96, nose 1.66 (8 points), lips 2.22, ear_left 23.8.
+  // Bounds: the 2 voxels on the median, the tip, the eyes and the nose; the lips at 3 voxels (one voxel
+  // above what they reach). The ears are reported, not bounded.
+  const double target = 2.0;
+  EXPECT_GE(o.axis_cos.minCoeff(), 0.95);
+  EXPECT_LE(o.nose_tip_vox, target);
+  EXPECT_GE(o.distance_vox.size(), 42u);  // 52 less the 10 ear points
+  EXPECT_LE(o.median_vox(), target);
+  const std::map<std::string, double> g = group_medians(o);
+  for (const char* area : {"eye_right", "eye_left", "nose"}) {
+    ASSERT_TRUE(g.count(area)) << area;
+    EXPECT_LE(g.at(area), target) << area;
+  }
+  ASSERT_TRUE(g.count("lips"));
+  EXPECT_LE(g.at("lips"), target + 1.0);
+}
+
+// The capture and scales before: one ring 10 degrees above, the paper's scales (1-ring evaluations, MLS h the
+// 1-ring edge, the eyes/nose boundary at half the widest feature's height). Measured: nose tip 0.52 voxel, median
+// 3.91 over 40 points, 28 % within 2 voxels (the nose's underside unseen: alae 15 voxels off, nostrils absent).
+TEST(HeadReconstruction, OneRingAtThePapersScales) {
+  if (!std::filesystem::exists(kMesh)) GTEST_SKIP() << kMesh << " is absent (../shared not mounted)";
+  const TriangleMesh source = read_mesh_file(kMesh);
+  const Config config;
+  const Outcome o = reconstruct(source, config);
+  print("paper scales", config, o);
   EXPECT_GE(o.axis_cos.minCoeff(), 0.9);
   EXPECT_LE(o.nose_tip_vox, 2.0);
   EXPECT_GE(o.distance_vox.size(), 38u);  // 52 less the 10 ear points less 2 nostrils (the unseen nose underside)
   EXPECT_LE(o.median_vox(), 5.0);
+}
 
+// HF_HEAD_E2E_CONFIG="voxel_m,frames,elevation,second_elevation(nan: none),second_sweep,physical(0/1)" runs one
+// configuration; HF_HEAD_E2E_REPORT=1 the rows of bench/results/head.md.
+TEST(HeadReconstruction, Report) {
+  if (!std::filesystem::exists(kMesh)) GTEST_SKIP() << kMesh << " is absent (../shared not mounted)";
+  const TriangleMesh source = read_mesh_file(kMesh);
+  if (const char* e = std::getenv("HF_HEAD_E2E_CONFIG")) {
+    Config c;
+    int physical = 0;
+    ASSERT_EQ(std::sscanf(e, "%lf,%d,%lf,%lf,%lf,%d", &c.voxel_m, &c.frames, &c.elevation_deg, &c.second_elevation_deg,
+                          &c.second_sweep_deg, &physical), 6) << "HF_HEAD_E2E_CONFIG: " << e;
+    c.physical = physical != 0;
+    print("config", c, reconstruct(source, c));
+  }
   if (std::getenv("HF_HEAD_E2E_REPORT")) {
-    for (const Config& c : {Config{0.002, 36, true, 70}, Config{0.002, 36, false, 70}, Config{0.003, 36, true, 70},
-                            Config{0.004, 36, true, 70}, Config{0.003, 18, true, 80}, Config{0.002, 36, true, 80},
-                            Config{0.003, 18, true, 70, -20.0}, Config{0.003, 36, true, 70, 10.0, 20.0},
-                            Config{0.003, 18, true, 70, 10.0, 0.0, -20.0}, Config{0.003, 18, true, 70, 10.0, 0.0, -30.0}})
-      print("report", c, reconstruct(source, on_source, c));
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (bool physical : {false, true})
+      for (const Config& c0 : {Config{0.003, 18, true, 70, 10, 0, nan, 360}, Config{0.003, 18, true, 70, 10, 0, -30, 120},
+                               Config{0.003, 18, true, 70, 10, 0, -20, 120}, Config{0.003, 36, true, 70, 10, 0, -30, 120},
+                               Config{0.002, 18, true, 70, 10, 0, -30, 120}, Config{0.0025, 18, true, 70, 10, 0, -30, 120},
+                               Config{0.004, 18, true, 70, 10, 0, -30, 120}, Config{0.003, 18, false, 70, 10, 0, -30, 120}}) {
+        Config c = c0;
+        c.physical = physical;
+        print("report", c, reconstruct(source, c));
+      }
   }
 }
 
