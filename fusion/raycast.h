@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/device_copy.h"
 #include "core/image.h"
 #include "core/se3.h"
 #include "fusion/voxel_block_grid.h"
@@ -99,6 +100,9 @@ struct RaycastResult {
   ColorImage color;      // the model's colour, black where no hit
   ColorImage shaded;     // grey head-light shading of the normals, for people (empty unless options.shade)
   int hit_count = 0;     // pixels with a surface
+  // Device copies of depth / vertices / normals (core/device_copy.h): DeviceVoxelGrid::raycast publishes its
+  // buffers; raycast() on the host, writing the images in place, drops them.
+  DeviceCopies device_copies;
 };
 
 // How far from a point of a ray raycast() reads voxels, in voxels: a trilinear sample's corners and the 4 x 4 x 4

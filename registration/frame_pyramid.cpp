@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "core/filters.h"
+#include "core/kernels/image_kernels.h"
 #include "core/normals.h"
 #include "core/push_pull.h"
 #include "core/pyramid.h"
@@ -78,10 +79,7 @@ FramePyramid build_model_pyramid(const VertexMap& vertices, const NormalMap& nor
   if (intensity != nullptr) check_size(intensity->width(), intensity->height(), camera, "the intensity image");
 
   DepthImage z(vertices.width(), vertices.height(), 0.0f);
-  for (size_t i = 0; i < z.size(); ++i) {
-    const hf_float4 v = vertices.pixels()[i];
-    z.pixels()[i] = (v.w != 0.0f && std::isfinite(v.z) && v.z > 0.0f) ? v.z : 0.0f;
-  }
+  for (size_t i = 0; i < z.size(); ++i) z.pixels()[i] = hf_model_depth_pixel(vertices.pixels()[i]);
   const std::vector<DepthImage> depths = build_depth_pyramid(z, levels);
 
   FramePyramid pyramid;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/device_copy.h"
 #include "core/image.h"
 
 namespace hf {
@@ -20,6 +21,10 @@ struct FramePyramidLevel {
   NormalMap normals;      // unit, towards the camera, w = 1 valid
   IntensityImage intensity;  // [0, 1]; empty when the frame had no colour
   Image<float> grad_x, grad_y;  // of intensity (Sobel / 8, intensity units per pixel); empty without colour
+  // Device copies of these maps (core/device_copy.h): filled by the device pyramid (registration/opencl/
+  // device_pyramid.h), empty on the cpu; a copied level has none. Whoever writes a map of the level in place drops
+  // its copy first.
+  DeviceCopies device_copies;
   int width() const { return camera.width; }
   int height() const { return camera.height; }
   bool has_intensity() const { return !intensity.empty(); }

@@ -80,15 +80,30 @@ Consistency volume_consistency(const VertexMap& current, const fusion::VoxelBloc
 }
 
 // The intensity levels of `from` move onto the levels `to` has (the photometric reference); nothing else of
-// `from` is needed again.
+// `from` is needed again. The images keep their pixels' addresses, so their device copies (core/device_copy.h)
+// move along.
 void take_intensity(FramePyramid& from, FramePyramid* to) {
   for (int l = 0; l < to->num_levels() && l < from.num_levels(); ++l) {
     FramePyramidLevel& dst = to->levels[size_t(l)];
     FramePyramidLevel& src = from.levels[size_t(l)];
-    dst.intensity = std::move(src.intensity);
-    dst.grad_x = std::move(src.grad_x);
-    dst.grad_y = std::move(src.grad_y);
+    for (Image<float> FramePyramidLevel::*image :
+         {&FramePyramidLevel::intensity, &FramePyramidLevel::grad_x, &FramePyramidLevel::grad_y}) {
+      dst.device_copies.drop((dst.*image).data());
+      src.device_copies.move_to(dst.device_copies, (src.*image).data());
+      dst.*image = std::move(src.*image);
+    }
   }
+}
+
+// The reference pyramid of the model maps: on the device where the raycast left them there (the device pyramid
+// binds their copies, and the levels stay there for the reduction), else on the host.
+FramePyramid model_pyramid([[maybe_unused]] opencl::DeviceFramePyramid* device, const fusion::RaycastResult& model,
+                           const PinholeCamera& camera, int levels) {
+#ifdef HF_HAVE_FUSION_OPENCL
+  if (device != nullptr && !model.device_copies.empty())
+    return device->build_model(model.vertices, model.normals, camera, levels);
+#endif
+  return build_model_pyramid(model.vertices, model.normals, nullptr, camera, levels);
 }
 
 }  // namespace
@@ -646,8 +661,8 @@ void Pipeline::raycast_reference(FramePyramid& current, const SE3& T_world_cur, 
     model_raycast(T_world_cur, ro);
   }
   reference_->T_world_model = T_world_cur;
-  reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
-                                            tracking_camera_, config_.pyramid.levels);
+  reference_->pyramid =
+      model_pyramid(device_pyramid_.get(), reference_->model, tracking_camera_, config_.pyramid.levels);
   take_intensity(current, &reference_->pyramid);
   reference_->valid = reference_->model.hit_count > 0;
   reference_->stale = false;
@@ -671,8 +686,8 @@ void Pipeline::model_raycast(const SE3& T_world_camera, const fusion::RaycastOpt
 void Pipeline::ensure_reference_maps() {
   if (!reference_->stale) return;
   model_raycast(reference_->T_world_model, config_.raycast);
-  reference_->pyramid = build_model_pyramid(reference_->model.vertices, reference_->model.normals, nullptr,
-                                            tracking_camera_, config_.pyramid.levels);
+  reference_->pyramid =
+      model_pyramid(device_pyramid_.get(), reference_->model, tracking_camera_, config_.pyramid.levels);
   take_intensity(reference_->frame_intensity, &reference_->pyramid);
   reference_->stale = false;
 }

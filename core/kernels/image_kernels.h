@@ -145,6 +145,10 @@ HF_INLINE float hf_bilateral_depth_pixel(const HF_GLOBAL float* src, int width, 
   return sum / wsum;  // wsum >= 1: the centre tap has weight exp(0)
 }
 
+// A model vertex's depth for the model pyramid (build_model_pyramid): z where the vertex is valid, finite and in
+// front of the camera, else 0 (no measurement).
+HF_INLINE float hf_model_depth_pixel(hf_float4 v) { return (v.w != 0.0f && hf_depth_is_valid(v.z)) ? v.z : 0.0f; }
+
 // Vertex map (KinectFusion eq. 3 / report eq. 3): the camera-frame point of pixel (x, y), or invalid.
 HF_INLINE hf_float4 hf_vertex_pixel(const HF_GLOBAL float* depth, hf_intrinsics K, int x, int y) {
   const float d = depth[y * K.width + x];

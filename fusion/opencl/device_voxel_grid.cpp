@@ -6,8 +6,10 @@
 #include <chrono>
 #include <cstddef>
 #include <cstring>
+#include <memory>
 #include <sstream>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "fusion/kernels/block_hash.h"
@@ -71,6 +73,9 @@ struct DeviceVoxelGrid::Impl {
   cl::Buffer rc_constants, rc_near, rc_far, rc_depth, rc_vertices, rc_normals, rc_hits, rc_hints;
   cl::Buffer rc_regions;  // the region occupancy set, `entries` slots
   cl::Buffer rc_colour;   // 3 bytes per pixel
+  // The tokens of the last raycast's published outputs (depth, vertices, normals): while a holder keeps one, the
+  // next raycast writes new buffers (a published copy is never written again).
+  std::vector<std::weak_ptr<const void>> rc_published;
   size_t rc_pixels = 0, rc_tiles = 0;
   DeviceVoxelGrid::RaycastTimes rc_times;
   size_t entries = 0;
@@ -491,6 +496,7 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
   const int W = camera.width, H = camera.height;
   const int TW = (W + 7) / 8, TH = (H + 7) / 8;
   const size_t n_pixels = size_t(W) * size_t(H), n_tiles = size_t(TW) * size_t(TH);
+  out->device_copies.clear();  // the images are written below: their old copies no longer mirror them
   ensure_image(&out->depth, W, H);
   ensure_image(&out->vertices, W, H);
   ensure_image(&out->normals, W, H);
@@ -510,7 +516,12 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
       m.rc_hints = cl::Buffer(c, CL_MEM_READ_ONLY, n_pixels * sizeof(float));
       m.rc_colour = cl::Buffer(c, CL_MEM_WRITE_ONLY, n_pixels * 3);
       m.rc_pixels = n_pixels;
+    } else if (std::any_of(m.rc_published.begin(), m.rc_published.end(), [](const auto& t) { return !t.expired(); })) {
+      m.rc_depth = cl::Buffer(c, CL_MEM_WRITE_ONLY, m.rc_pixels * sizeof(float));
+      m.rc_vertices = cl::Buffer(c, CL_MEM_WRITE_ONLY, m.rc_pixels * sizeof(hf_float4));
+      m.rc_normals = cl::Buffer(c, CL_MEM_WRITE_ONLY, m.rc_pixels * sizeof(hf_float4));
     }
+    m.rc_published.clear();
     if (n_tiles > m.rc_tiles) {
       m.rc_near = cl::Buffer(c, CL_MEM_READ_WRITE, n_tiles * sizeof(cl_uint));
       m.rc_far = cl::Buffer(c, CL_MEM_READ_WRITE, n_tiles * sizeof(cl_uint));
@@ -595,6 +606,20 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
     q.enqueueReadBuffer(m.rc_hits, CL_TRUE, 0, sizeof(hits), &hits);
     m.rc_times.read_ms = ms_since(t2);
     out->hit_count = int(hits);
+    // The maps stay on the device as the host images' copies (core/device_copy.h): the model pyramid and the
+    // reduction on this context bind them instead of uploading the read-back.
+    struct Output {
+      const void* host;
+      size_t bytes;
+      const cl::Buffer* buffer;
+    };
+    for (const Output& o : {Output{out->depth.data(), n_pixels * sizeof(float), &m.rc_depth},
+                            Output{out->vertices.data(), n_pixels * sizeof(hf_float4), &m.rc_vertices},
+                            Output{out->normals.data(), n_pixels * sizeof(hf_float4), &m.rc_normals}}) {
+      std::shared_ptr<const void> token = m.ctx->publish(o.host, o.bytes, *o.buffer);
+      m.rc_published.push_back(token);
+      out->device_copies.add(o.host, std::move(token));
+    }
     if (options.shade) {
       // raycast.cpp's pixel write of the shading, on the host from the read-back normals: the same ray
       // direction (PinholeCamera's doubles, then float) and hf_headlight_shade.

@@ -39,7 +39,46 @@ void check_size(int width, int height, const PinholeCamera& camera, const char* 
 struct DeviceFramePyramid::Impl {
   std::shared_ptr<Context> ctx;
   cl::CommandQueue queue;
-  cl::Kernel keep, down_depth, down_gaussian, bilateral, vertices, normals, intensity, gradients;
+  cl::Kernel keep, down_depth, down_gaussian, bilateral, vertices, normals, intensity, gradients, model_depth;
+  // The device buffers of the maps just read back, published when the queue has finished (Context::publish).
+  struct Published {
+    FramePyramidLevel* level;
+    const void* host;
+    size_t bytes;
+    cl::Buffer buffer;
+  };
+  std::vector<Published> published;
+
+  template <class T>
+  void read_back(const cl::Buffer& src, Image<T>& dst, FramePyramidLevel& level, bool blocking) {
+    const size_t bytes = dst.size() * sizeof(T);
+    queue.enqueueReadBuffer(src, blocking ? CL_TRUE : CL_FALSE, 0, bytes, dst.data());
+    published.push_back({&level, dst.data(), bytes, src});
+  }
+  // Every read finished: the buffers hold what the host images hold, and nothing writes them again (each build
+  // allocates its own), so they become the images' device copies.
+  void publish_all() {
+    queue.finish();
+    for (const Published& p : published)
+      p.level->device_copies.add(p.host, ctx->publish(p.host, p.bytes, p.buffer));
+    published.clear();
+  }
+  // Vertices and normals of a w x h level from its depth, read back into `level`.
+  void geometry(const cl::Buffer& d, int w, int h, FramePyramidLevel& level) {
+    const NormalParams np;
+    const size_t n = size_t(w) * size_t(h);
+    cl::Buffer v = buffer(n * sizeof(hf_float4)), nn = buffer(n * sizeof(hf_float4));
+    hf_intrinsics K = level.camera.kernel_intrinsics();
+    K.width = w, K.height = h;
+    set_args(vertices, d, K, v);
+    run_2d(queue, vertices, w, h);
+    set_args(normals, v, w, h, np.max_depth_jump_ratio, nn);
+    run_2d(queue, normals, w, h);
+    level.vertices = VertexMap(w, h);
+    level.normals = NormalMap(w, h);
+    read_back(v, level.vertices, level, false);
+    read_back(nn, level.normals, level, true);
+  }
 
   cl::Buffer buffer(size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE) const {
     return cl::Buffer(ctx->context(), flags, bytes == 0 ? 1 : bytes);
@@ -73,6 +112,7 @@ DeviceFramePyramid::DeviceFramePyramid(std::shared_ptr<Context> context) : impl_
     m.normals = cl::Kernel(p, "hf_pyr_normals");
     m.intensity = cl::Kernel(p, "hf_pyr_intensity");
     m.gradients = cl::Kernel(p, "hf_pyr_gradients");
+    m.model_depth = cl::Kernel(p, "hf_pyr_model_depth");
   } catch (const Error&) {
     throw;
   } catch (...) {
@@ -124,7 +164,6 @@ FramePyramid DeviceFramePyramid::build(const DepthImage& depth, const ColorImage
       run_2d(q, m.bilateral, w, h);
       d = filtered;
     }
-    const NormalParams np;
     for (int l = 0; l < options.levels; ++l) {
       FramePyramidLevel& level = pyramid.levels[size_t(l)];
       level.camera = camera.scaled(options.first_level + l);
@@ -132,18 +171,7 @@ FramePyramid DeviceFramePyramid::build(const DepthImage& depth, const ColorImage
         d = m.half_depth(d, w, h, max_diff_m);
         w /= 2, h /= 2;
       }
-      const size_t n = size_t(w) * size_t(h);
-      cl::Buffer v = m.buffer(n * sizeof(hf_float4)), nn = m.buffer(n * sizeof(hf_float4));
-      hf_intrinsics K = level.camera.kernel_intrinsics();
-      K.width = w, K.height = h;
-      set_args(m.vertices, d, K, v);
-      run_2d(q, m.vertices, w, h);
-      set_args(m.normals, v, w, h, np.max_depth_jump_ratio, nn);
-      run_2d(q, m.normals, w, h);
-      level.vertices = VertexMap(w, h);
-      level.normals = NormalMap(w, h);
-      q.enqueueReadBuffer(v, CL_FALSE, 0, n * sizeof(hf_float4), level.vertices.data());
-      q.enqueueReadBuffer(nn, CL_TRUE, 0, n * sizeof(hf_float4), level.normals.data());
+      m.geometry(d, w, h, level);
     }
     if (color != nullptr) {
       w = color->width(), h = color->height();
@@ -167,15 +195,74 @@ FramePyramid DeviceFramePyramid::build(const DepthImage& depth, const ColorImage
         level.intensity = Image<float>(w, h);
         level.grad_x = Image<float>(w, h);
         level.grad_y = Image<float>(w, h);
-        q.enqueueReadBuffer(g, CL_FALSE, 0, n * sizeof(float), level.intensity.data());
-        q.enqueueReadBuffer(gx, CL_FALSE, 0, n * sizeof(float), level.grad_x.data());
-        q.enqueueReadBuffer(gy, CL_TRUE, 0, n * sizeof(float), level.grad_y.data());
+        m.read_back(g, level.intensity, level, false);
+        m.read_back(gx, level.grad_x, level, false);
+        m.read_back(gy, level.grad_y, level, true);
       }
     }
+    m.publish_all();
   } catch (const Error&) {
+    m.published.clear();
     throw;
   } catch (...) {
+    m.published.clear();
     rethrow_as_hf_error("frame pyramid on " + device_name());
+  }
+  return pyramid;
+}
+
+FramePyramid DeviceFramePyramid::build_model(const VertexMap& vertices, const NormalMap& normals,
+                                             const PinholeCamera& camera, int levels) {
+  if (levels < 1) throw Error("frame pyramid: levels must be >= 1, got " + std::to_string(levels));
+  check_size(vertices.width(), vertices.height(), camera, "the vertex map");
+  check_size(normals.width(), normals.height(), camera, "the normal map");
+  for (int l = 0, w = camera.width, h = camera.height; l + 1 < levels; ++l, w /= 2, h /= 2) {
+    if (w < 2 || h < 2)
+      throw Error("frame pyramid (device): a " + std::to_string(w) + "x" + std::to_string(h) +
+                  " image cannot be halved (need at least 2x2)");
+  }
+  Impl& m = *impl_;
+  const float max_diff_m = 3.0f * kDepthPyramidSigmaR_m;  // build_depth_pyramid's default
+  FramePyramid pyramid;
+  pyramid.levels.resize(size_t(levels));
+  try {
+    cl::CommandQueue& q = m.queue;
+    int w = camera.width, h = camera.height;
+    const size_t n = size_t(w) * size_t(h), bytes = n * sizeof(hf_float4);
+    // The maps' device copies where they have them (the device raycast's), else one upload each.
+    auto on_device = [&](const Image<hf_float4>& map) {
+      cl::Buffer b = m.ctx->resident(map.data(), bytes);
+      if (b() != nullptr) return b;
+      b = m.buffer(bytes, CL_MEM_READ_ONLY);
+      q.enqueueWriteBuffer(b, CL_FALSE, 0, bytes, map.data());
+      return b;
+    };
+    const cl::Buffer v0 = on_device(vertices), n0 = on_device(normals);
+    FramePyramidLevel& level0 = pyramid.levels[0];
+    level0.camera = camera;
+    level0.vertices = vertices;  // host copies; their device copies are the same buffers
+    level0.normals = normals;
+    m.published.push_back({&level0, level0.vertices.data(), bytes, v0});
+    m.published.push_back({&level0, level0.normals.data(), bytes, n0});
+    if (levels > 1) {
+      cl::Buffer d = m.buffer(n * sizeof(float));
+      set_args(m.model_depth, v0, w, h, d);
+      run_2d(q, m.model_depth, w, h);
+      for (int l = 1; l < levels; ++l) {
+        FramePyramidLevel& level = pyramid.levels[size_t(l)];
+        level.camera = camera.scaled(l);
+        d = m.half_depth(d, w, h, max_diff_m);
+        w /= 2, h /= 2;
+        m.geometry(d, w, h, level);
+      }
+    }
+    m.publish_all();
+  } catch (const Error&) {
+    m.published.clear();
+    throw;
+  } catch (...) {
+    m.published.clear();
+    rethrow_as_hf_error("model pyramid on " + device_name());
   }
   return pyramid;
 }

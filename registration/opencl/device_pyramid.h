@@ -6,7 +6,9 @@
 //   hf::FramePyramid p = builder.build(depth, &colour, camera, options);
 //
 // Same inputs, outputs and errors as build_frame_pyramid, except fill_holes_levels > 0 (push-pull has no device
-// kernel): hf::Error. The levels come back to host memory (what the reduction backends take today). Agreement
+// kernel): hf::Error. The levels come back to host memory for the CPU stages, and each level's maps stay on the
+// device as their published copies (core/device_copy.h, FramePyramidLevel::device_copies), which the OpenCL
+// reduction backend on the same context binds instead of uploading them again. Agreement
 // with the C++ pyramid: the depth steps, vertices, normals, intensity and gradients are the same float
 // operations (FP_CONTRACT OFF, correctly rounded division); the bilateral filter's exp is the device's, within a
 // few ulps of the C++ one, so filtered depths differ by float rounding (on PoCL, the room at 320x240: vertices
@@ -33,6 +35,12 @@ class DeviceFramePyramid {
 
   FramePyramid build(const DepthImage& depth, const ColorImage* color, const PinholeCamera& camera,
                      const FramePyramidOptions& options = {});
+  // build_model_pyramid (registration/frame_pyramid.h, no intensity) on the device, from model maps that have a
+  // copy here (the device raycast's, DeviceVoxelGrid::raycast) or are uploaded once otherwise: level 0 holds
+  // copies of the maps (published with the same device copies), the coarser levels are derived on the device.
+  // Same errors as build_model_pyramid; agreement with it as for build() (same float operations).
+  FramePyramid build_model(const VertexMap& vertices, const NormalMap& normals, const PinholeCamera& camera,
+                           int levels = 3);
   std::string device_name() const;
 
  private:

@@ -104,6 +104,7 @@ cl::Buffer& OpenClReductionBackend::slot_buffer(int slot, const void* data, std:
   queue_.enqueueWriteBuffer(s.buffer, CL_FALSE, 0, bytes, data);
   s.source = data;
   s.bytes = bytes;
+  s.bound = s.buffer;
   return s.buffer;
 }
 
@@ -120,8 +121,15 @@ void OpenClReductionBackend::upload_inputs(const ResidualProblem& p, cl::Kernel&
       if (p.maps[i].data == nullptr) {
         slots_[i].source = nullptr;
         slots_[i].bytes = 0;
+      } else if (cl::Buffer copy = context_->resident(p.maps[i].data, n * p.maps[i].bytes_per_pixel); copy()) {
+        // Made on this device and still true (its holder keeps the token): bind it, nothing crosses.
+        slots_[i].source = p.maps[i].data;
+        slots_[i].bytes = n * p.maps[i].bytes_per_pixel;
+        slots_[i].bound = copy;
+        ++resident_binds_;
       } else {
         slot_buffer(i, p.maps[i].data, n * p.maps[i].bytes_per_pixel);
+        ++map_uploads_;
       }
     }
     have_inputs_ = true;
@@ -148,7 +156,7 @@ void OpenClReductionBackend::upload_inputs(const ResidualProblem& p, cl::Kernel&
   }
   // Arguments belong to the kernel object (one per method): bind the slots every time, which is cheap.
   for (int i = 0; i < HF_REG_MAX_INPUTS; ++i) {
-    kernel.setArg(kArgFirstMap + i, slots_[i].source == nullptr ? dummy_ : slots_[i].buffer);
+    kernel.setArg(kArgFirstMap + i, slots_[i].source == nullptr ? dummy_ : slots_[i].bound);
   }
 }
 

@@ -14,8 +14,10 @@
 // normal equations, far tighter in practice); without fp64 the device sums in float (pairwise in the group tree).
 // Buffers: one per input slot (HF_REG_MAX_INPUTS), allocated once at the largest size seen and reused; the input
 // maps are uploaded only when ResidualProblem::inputs_version, a map pointer or the size changes (the driver keeps
-// them across the iterations of one level), so an iteration uploads only its pose and parameters. A slot holding a
-// KernelBuffer (a method's table, reduction.h) is uploaded when that buffer or its version changes.
+// them across the iterations of one level), so an iteration uploads only its pose and parameters. A map that already
+// has a copy on the device (core/device_copy.h: the device pyramid's and the device raycast's outputs, published
+// on the context) is bound, not uploaded: with --backend opencl only the pose, the parameters and the 29 sums cross.
+// A slot holding a KernelBuffer (a method's table, reduction.h) is uploaded when that buffer or its version changes.
 // Failures: hf::Error for a malformed problem (validate_problem), for a method without an OpenCL kernel and for any
 // OpenCL error (naming the call and the error code). Thread-safety: one thread at a time per backend object (own
 // command queue); several backends may share the context from different threads.
@@ -62,12 +64,16 @@ class OpenClReductionBackend final : public ReductionBackend {
   std::uint64_t uploads() const { return uploads_; }
   // How many times a KernelBuffer was uploaded (one per new buffer or version), for tests.
   std::uint64_t buffer_uploads() const { return buffer_uploads_; }
+  // Of the maps of those input sets: how many were uploaded from the host, how many bound to a device copy.
+  std::uint64_t map_uploads() const { return map_uploads_; }
+  std::uint64_t resident_binds() const { return resident_binds_; }
 
  private:
   // One input map slot: the device buffer (capacity in bytes) and what it currently holds.
   struct Slot {
-    cl::Buffer buffer;
+    cl::Buffer buffer;  // the slot's own buffer, for uploads
     std::size_t capacity = 0;
+    cl::Buffer bound;   // what the kernel reads: `buffer`, or a device copy of the host map (Context::resident)
     const void* source = nullptr;
     std::size_t bytes = 0;
     // A KernelBuffer's slot: the buffer and the version the device copy holds (source: its contents' pointer).
@@ -100,6 +106,8 @@ class OpenClReductionBackend final : public ReductionBackend {
   int width_ = 0, height_ = 0;
   std::uint64_t uploads_ = 0;
   std::uint64_t buffer_uploads_ = 0;
+  std::uint64_t map_uploads_ = 0;
+  std::uint64_t resident_binds_ = 0;
 };
 
 }  // namespace opencl

@@ -241,6 +241,35 @@ std::shared_ptr<Context> Context::shared() {
   return ctx;
 }
 
+std::shared_ptr<const void> Context::publish(const void* host, std::size_t bytes, const cl::Buffer& buffer) {
+  if (host == nullptr || bytes == 0 || buffer() == nullptr) return nullptr;
+  auto copy = std::make_shared<const cl::Buffer>(buffer);
+  std::lock_guard<std::mutex> lock(residency_mutex_);
+  // Entries whose holders dropped them go first: the table stays as small as the live copies.
+  std::erase_if(residency_, [](const auto& entry) { return entry.second.copy.expired(); });
+  residency_[host] = Residency{bytes, copy};
+  ++residency_stats_.published;
+  return copy;
+}
+
+cl::Buffer Context::resident(const void* host, std::size_t bytes) {
+  std::lock_guard<std::mutex> lock(residency_mutex_);
+  auto it = residency_.find(host);
+  if (it != residency_.end() && it->second.bytes == bytes) {
+    if (const std::shared_ptr<const cl::Buffer> copy = it->second.copy.lock()) {
+      ++residency_stats_.hits;
+      return *copy;
+    }
+  }
+  ++residency_stats_.misses;
+  return cl::Buffer();
+}
+
+Context::ResidencyStats Context::residency_stats() const {
+  std::lock_guard<std::mutex> lock(residency_mutex_);
+  return residency_stats_;
+}
+
 cl::Program Context::program(const std::string& key, std::string_view source, const std::string& options) {
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = programs_.find(key);

@@ -25,6 +25,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -98,7 +99,28 @@ class Context {
   // kernel's own (CL_DEVICE_LOCAL_MEM_SIZE - CL_KERNEL_LOCAL_MEM_SIZE). At least 1.
   std::size_t work_group_size(const cl::Kernel& kernel, std::size_t local_bytes_per_item, std::size_t cap) const;
 
+  // Residency (core/device_copy.h): which host images already have a copy on this device. A stage that made an
+  // image here and read it back publishes the buffer as the copy of the host bytes [host, host + bytes) and gets a
+  // token; the entry holds while the token lives (the image's holder keeps it, DeviceCopies), and so does the
+  // buffer. The buffer must hold those bytes when published (the producer's queue finished) and must not be written
+  // afterwards: a producer allocates new buffers for its next output. A later publish for the same host bytes
+  // replaces the entry. Thread-safe.
+  std::shared_ptr<const void> publish(const void* host, std::size_t bytes, const cl::Buffer& buffer);
+  // The published copy of exactly [host, host + bytes) whose token still lives, else a null buffer (buffer() ==
+  // nullptr). Counted in residency_stats().
+  cl::Buffer resident(const void* host, std::size_t bytes);
+  struct ResidencyStats {
+    std::uint64_t published = 0;  // publish() calls
+    std::uint64_t hits = 0;       // resident() calls that found a copy
+    std::uint64_t misses = 0;     // resident() calls that did not (the caller uploads the host bytes)
+  };
+  ResidencyStats residency_stats() const;
+
  private:
+  struct Residency {
+    std::size_t bytes = 0;
+    std::weak_ptr<const cl::Buffer> copy;
+  };
   struct Built {
     std::string source;
     std::string options;
@@ -111,6 +133,9 @@ class Context {
   cl::CommandQueue queue_;
   std::mutex mutex_;
   std::map<std::string, Built> programs_;
+  mutable std::mutex residency_mutex_;
+  std::map<const void*, Residency> residency_;
+  ResidencyStats residency_stats_;
 };
 
 // Turns a cl::Error into hf::Error "WHAT: CALL: CL_NAME (code)"; any other exception is rethrown unchanged.

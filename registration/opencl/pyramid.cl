@@ -41,6 +41,13 @@ __kernel void hf_pyr_bilateral(__global const float* src, int width, int height,
                                                 inv_two_sigma_r2);
 }
 
+// build_model_pyramid's depth of a model vertex map (registration/frame_pyramid.cpp).
+__kernel void hf_pyr_model_depth(__global const float4* vertices, int width, int height, __global float* dst) {
+  const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+  if (x >= width || y >= height) return;
+  dst[y * width + x] = hf_model_depth_pixel(vertices[y * width + x]);
+}
+
 // compute_vertex_map and compute_normal_map (core/normals.h).
 __kernel void hf_pyr_vertices(__global const float* depth, hf_intrinsics K, __global float4* dst) {
   const int x = (int)get_global_id(0), y = (int)get_global_id(1);

@@ -372,6 +372,74 @@ TEST(DeviceFramePyramid, MatchesTheCpuPyramid) {
   EXPECT_THROW(device.build(f.depth, &f.color, seq.camera().scaled(1)), Error);
 }
 
+// Residency (core/device_copy.h): the device pyramid's levels stay on the device as their host images' copies, so
+// the reduction binds them and uploads no map; the poses are those of the same registration over host copies of the
+// same images (uploaded: same bytes, same kernels, so bit for bit). Dropping the copies makes the backend upload.
+TEST(OpenClBackend, BindsTheDevicePyramidsMapsInsteadOfUploadingThem) {
+  HF_SKIP_WITHOUT_OPENCL();
+  datasets::SyntheticOptions options;
+  options.preset = "room";
+  options.frames = 4;
+  options.camera = PinholeCamera::preset("ros").scaled(2);  // 160x120
+  const datasets::SyntheticSequence seq(options);
+  const datasets::SyntheticFrame a = seq.frame(0), b = seq.frame(3);
+  opencl::DeviceFramePyramid device;
+  FramePyramid reference = device.build(a.depth, &a.color, seq.camera());
+  FramePyramid current = device.build(b.depth, &b.color, seq.camera());
+  // Every map of every level has its copy.
+  for (const FramePyramid* p : {&reference, &current})
+    for (const FramePyramidLevel& level : p->levels) EXPECT_EQ(level.device_copies.size(), 5u);
+  // Host copies of the same images (a copied level's images live elsewhere: no copy matches them).
+  FramePyramid host_reference = reference, host_current = current;
+  for (const std::string name : {"icp", "combined"}) {
+    auto backend = std::make_unique<opencl::OpenClReductionBackend>();
+    const opencl::OpenClReductionBackend* counters = backend.get();
+    const auto reg = make_registration(name, default_registration_options(name), std::move(backend));
+    const RegistrationResult on_device = reg->align(current, reference, SE3());
+    EXPECT_EQ(counters->map_uploads(), 0u) << name;
+    EXPECT_GT(counters->resident_binds(), 0u) << name;
+    const RegistrationResult uploaded = reg->align(host_current, host_reference, SE3());
+    EXPECT_GT(counters->map_uploads(), 0u) << name;
+    EXPECT_EQ(on_device.status, uploaded.status) << name;
+    EXPECT_EQ((on_device.T_ref_cur.matrix() - uploaded.T_ref_cur.matrix()).cwiseAbs().maxCoeff(), 0.0) << name;
+    EXPECT_LT(test::translation_error_m(on_device.T_ref_cur, a.T_world_camera.inverse() * b.T_world_camera), 0.01)
+        << name;
+  }
+  // Without the tokens the entries are gone: the same images are uploaded.
+  auto backend = std::make_unique<opencl::OpenClReductionBackend>();
+  const opencl::OpenClReductionBackend* counters = backend.get();
+  const auto reg = make_registration("icp", default_registration_options("icp"), std::move(backend));
+  for (FramePyramid* p : {&reference, &current})
+    for (FramePyramidLevel& level : p->levels) level.device_copies.clear();
+  reg->align(current, reference, SE3());
+  EXPECT_GT(counters->map_uploads(), 0u);
+  EXPECT_EQ(counters->resident_binds(), 0u);
+}
+
+// build_model on the device against build_model_pyramid: the same float operations (z of the vertices, the
+// depth-aware halving, back-projection, normals), so equal maps; level 0's copies are published for its images.
+TEST(DeviceFramePyramid, ModelPyramidMatchesTheCpus) {
+  HF_SKIP_WITHOUT_OPENCL();
+  const FramePair& pair = room_pair();
+  const FramePyramidLevel& model = pair.ref.levels[0];
+  opencl::DeviceFramePyramid device;
+  const FramePyramid a = build_model_pyramid(model.vertices, model.normals, nullptr, model.camera, 3);
+  const FramePyramid b = device.build_model(model.vertices, model.normals, model.camera, 3);
+  ASSERT_EQ(b.num_levels(), 3);
+  for (int l = 0; l < 3; ++l) {
+    const FramePyramidLevel &x = a.levels[size_t(l)], &y = b.levels[size_t(l)];
+    EXPECT_EQ(y.camera.width, x.camera.width);
+    const MapGap v = gap(x.vertices, y.vertices), n = gap(x.normals, y.normals);
+    EXPECT_EQ(v.flags + n.flags, 0) << "level " << l;
+    EXPECT_EQ(v.max_abs, 0.0) << "level " << l;
+    EXPECT_EQ(n.max_abs, 0.0) << "level " << l;
+    EXPECT_FALSE(y.has_intensity());
+    EXPECT_EQ(y.device_copies.size(), 2u);
+  }
+  EXPECT_THROW(device.build_model(model.vertices, model.normals, model.camera.scaled(1), 3), Error);
+  EXPECT_THROW(device.build_model(model.vertices, model.normals, model.camera, 0), Error);
+}
+
 // sdf on the device meets the inputs that leave its map or its frame empty (no valid depth, one valid pixel, as
 // either frame) with the cpu backend's status and pose: an empty map is a flat table of empty entries, not a
 // zero-sized buffer, and a frame without rows reduces to nothing on both.

@@ -8,8 +8,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "datasets/synthetic_sequence.h"
 #include "fusion/integrate.h"
@@ -260,6 +262,50 @@ TEST(DeviceVoxelGrid, RaycastMatchesTheCpuRaycast) {
 
 // InfiniTAM stops silently when its block budget is exhausted; here the frame fails with the typed error, the
 // pool holds exactly its capacity, and no voxel was updated (as the CPU's integrate()).
+// The raycast's outputs stay on the device as the result's copies (core/device_copy.h): each copy holds exactly
+// the read-back image, and a later raycast into another result never writes a copy a holder still keeps. A host
+// raycast into the result writes its images in place and drops the copies.
+TEST(DeviceVoxelGrid, RaycastCopiesHoldTheirImagesUntilDropped) {
+  HF_CONTEXT_OR_SKIP(ctx);
+  const VolumeParams volume = params_1cm();
+  const PinholeCamera camera = small_camera();
+  const auto seq = room(6);
+  DeviceVoxelGrid device(volume, ctx);
+  VoxelBlockGrid cpu(volume);
+  for (int i = 0; i < 3; ++i) {
+    const auto f = seq.frame(i);
+    device.integrate(f.depth, f.color, camera, f.T_world_camera);
+    integrate(cpu, f.depth, f.color, camera, f.T_world_camera);
+  }
+  RaycastResult first, second;
+  device.raycast(camera, seq.frame(1).T_world_camera, RaycastOptions{}, &first);
+  device.raycast(camera, seq.frame(5).T_world_camera, RaycastOptions{}, &second);
+  ASSERT_GT(first.hit_count, 0);
+  EXPECT_EQ(first.device_copies.size(), 3u);
+  auto device_image = [&](const VertexMap& host) {
+    const size_t bytes = host.size() * sizeof(hf_float4);
+    const cl::Buffer copy = ctx->resident(host.data(), bytes);
+    VertexMap back(host.width(), host.height());
+    if (copy() != nullptr) ctx->queue().enqueueReadBuffer(copy, CL_TRUE, 0, bytes, back.data());
+    return std::pair{copy() != nullptr, back};
+  };
+  for (const RaycastResult* r : {&first, &second}) {
+    for (const VertexMap* map : {&r->vertices, &r->normals}) {
+      const auto [found, back] = device_image(*map);
+      ASSERT_TRUE(found);
+      EXPECT_EQ(std::memcmp(back.data(), map->data(), map->size() * sizeof(hf_float4)), 0);
+    }
+  }
+  // The host raycast writes `first` in place: its copies go, nothing is bound for its images any more.
+  raycast(cpu, camera, seq.frame(1).T_world_camera, RaycastOptions{}, &first);
+  EXPECT_TRUE(first.device_copies.empty());
+  EXPECT_FALSE(device_image(first.vertices).first);
+  // A copied result carries no copies (its images live elsewhere).
+  const RaycastResult copied = second;
+  EXPECT_TRUE(copied.device_copies.empty());
+  EXPECT_FALSE(device_image(copied.vertices).first);
+}
+
 TEST(DeviceVoxelGrid, PoolExhaustionIsCapacityErrorWithNothingUpdated) {
   HF_CONTEXT_OR_SKIP(ctx);
   const VolumeParams volume = params_1cm(32);
@@ -331,6 +377,7 @@ TEST(DeviceVoxelGrid, BadFrameAndOversizedPoolAreTypedErrors) {
 // device, the host map following it) against backend cpu on the same synthetic frames: with ground-truth poses the
 // maps are the same bit for bit; tracked (combined), the poses differ only by float rounding (the reductions'
 // order, the raycast's ray set-up, the bilateral filter's exp; tolerance 0.1 mm, 1e-4 rad: far below one voxel).
+// On the device no map crosses to it between stages: the context's residency table finds every one.
 TEST(DeviceVoxelGrid, PipelineOnTheDeviceMatchesTheCpuPipeline) {
   HF_CONTEXT_OR_SKIP(ctx);
   const PinholeCamera camera = small_camera();
@@ -339,6 +386,7 @@ TEST(DeviceVoxelGrid, PipelineOnTheDeviceMatchesTheCpuPipeline) {
     std::vector<SE3> poses[2];
     VoxelBlockGrid maps[2] = {VoxelBlockGrid(params_1cm()), VoxelBlockGrid(params_1cm())};
     for (int b = 0; b < 2; ++b) {
+      const opencl::Context::ResidencyStats before = ctx->residency_stats();
       slam::PipelineConfig config;
       config.registration = registration;
       config.backend = b == 0 ? "cpu" : "opencl";
@@ -361,6 +409,15 @@ TEST(DeviceVoxelGrid, PipelineOnTheDeviceMatchesTheCpuPipeline) {
       for (const char* stage : {"integrate", "raycast", "preprocess"}) EXPECT_EQ(devices.at(stage), device) << stage;
       if (registration != "groundtruth") {
         EXPECT_EQ(devices.at("registration"), device);
+      }
+      // The frames' pyramids, the model maps and the model pyramid stay on the device between the stages: every
+      // map the reduction and the model pyramid read was found there, none uploaded (core/device_copy.h).
+      const opencl::Context::ResidencyStats after = ctx->residency_stats();
+      if (b == 1) {
+        EXPECT_EQ(after.misses - before.misses, 0u) << registration;
+        if (registration != "groundtruth") {  // groundtruth casts no model maps
+          EXPECT_GT(after.hits - before.hits, 0u) << registration;
+        }
       }
       for (const auto& [c, block] : pipeline.map().blocks()) *maps[b].allocate(c) = *block;
     }
