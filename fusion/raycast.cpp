@@ -495,20 +495,11 @@ void refine(VolumeSampler& sampler, const MarchParams& m, const Eigen::Vector3f&
             float ta, float sa, float tb, float sb, Hit* hit) {
   constexpr int kRefineSteps = 6;
   float tc = hf_zero_crossing(ta, sa, tb, sb);
-  int kept = 0;  // +1: the + end was kept last time, -1: the - end
+  int kept = 0;
   for (int it = 0; it < kRefineSteps && tb - ta > m.refine_tol_m; ++it) {
     float sc = 0.0f;
-    if (!sampler.sdf(o_vox + tc * d_vox, &sc) || std::fabs(sc) * (tb - ta) <= m.refine_tol_m * (sa - sb)) break;
-    if (sc > 0.0f) {
-      ta = tc, sa = sc;
-      if (kept == -1) sb *= 0.5f;  // Illinois: the - end stays again, halve its weight
-      kept = -1;
-    } else {
-      tb = tc, sb = sc;
-      if (kept == 1) sa *= 0.5f;
-      kept = 1;
-    }
-    tc = hf_zero_crossing(ta, sa, tb, sb);
+    if (!sampler.sdf(o_vox + tc * d_vox, &sc) || hf_refine_converged(sc, ta, sa, tb, sb, m.refine_tol_m)) break;
+    tc = hf_illinois_step(tc, sc, &ta, &sa, &tb, &sb, &kept);
   }
   hit->t = tc;
   hit->p_vox = o_vox + tc * d_vox;

@@ -28,6 +28,30 @@ HF_INLINE float hf_zero_crossing(float t0, float sdf0, float t1, float sdf1) {
   return t0 + (t1 - t0) * sdf0 / (sdf0 - sdf1);
 }
 
+// The refinement of a crossing on a + to - bracket (ta, sa >= 0) .. (tb, sb < 0) along a ray (raycast.cpp's
+// refine, raycast.cl's hf_raycast_refine), from the estimate tc = hf_zero_crossing(ta, sa, tb, sb) and the sample
+// sc there. Converged when the sample predicts the crossing within tol of tc: |sc| over the bracket's secant slope
+// (sa - sb) / (tb - ta); regula falsi keeps one end, so the bracket itself may shrink slowly long after that.
+HF_INLINE int hf_refine_converged(float sc, float ta, float sa, float tb, float sb, float tol) {
+  return hf_fabs(sc) * (tb - ta) <= tol * (sa - sb);
+}
+
+// One Illinois regula falsi step: sc replaces the end of its sign, and an end kept twice in a row has its value
+// halved, so the estimate closes in from both sides. *kept: +1 the + end stayed last time, -1 the - end, 0 none
+// yet. Returns the next estimate.
+HF_INLINE float hf_illinois_step(float tc, float sc, float* ta, float* sa, float* tb, float* sb, int* kept) {
+  if (sc > 0.0f) {
+    *ta = tc, *sa = sc;
+    if (*kept == -1) *sb *= 0.5f;
+    *kept = -1;
+  } else {
+    *tb = tc, *sb = sc;
+    if (*kept == 1) *sa *= 0.5f;
+    *kept = 1;
+  }
+  return hf_zero_crossing(*ta, *sa, *tb, *sb);
+}
+
 // The fine raycasting step in metres at a sample of normalised SDF sdf: a fraction of the distance to the surface
 // the SDF promises (sdf * mu), never below min_step_m, so a step cannot jump over the zero crossing as long as
 // step_fraction < 1 (the TSDF is a distance bound) and the ray always advances.

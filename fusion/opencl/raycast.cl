@@ -177,18 +177,9 @@ inline float hf_raycast_refine(const hf_flat_map* map, const hf_raycast_params* 
   for (int it = 0; it < 6 && tb - ta > P->refine_tol_m; ++it) {
     float sc = 0.0f;
     if (!hf_raycast_sample(map, P->min_weight_raw, o[0] + tc * d[0], o[1] + tc * d[1], o[2] + tc * d[2], &sc) ||
-        fabs(sc) * (tb - ta) <= P->refine_tol_m * (sa - sb))
+        hf_refine_converged(sc, ta, sa, tb, sb, P->refine_tol_m))
       break;
-    if (sc > 0.0f) {
-      ta = tc, sa = sc;
-      if (kept == -1) sb *= 0.5f;
-      kept = -1;
-    } else {
-      tb = tc, sb = sc;
-      if (kept == 1) sa *= 0.5f;
-      kept = 1;
-    }
-    tc = hf_zero_crossing(ta, sa, tb, sb);
+    tc = hf_illinois_step(tc, sc, &ta, &sa, &tb, &sb, &kept);
   }
   return tc;
 }
