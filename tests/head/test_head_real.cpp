@@ -108,6 +108,7 @@ struct HeadCase {
   const char* file;
   bool ears;
   std::vector<std::string> loose;  // areas (name before the '.') held to 1.6 rho instead of rho
+  bool physical = false;  // head_features.h's use_physical_scale() (chosen on a fused head, reported here)
 };
 
 void PrintTo(const HeadCase& c, std::ostream* os) { *os << c.file; }
@@ -127,6 +128,7 @@ TEST_P(RealHead, SymmetricOrderedAndStableUnderSimilarity) {
   const TriangleMesh mesh = load(hc.file);
   HeadFeatureOptions options;
   options.automatic = true;
+  if (hc.physical) use_physical_scale(options);
   const HeadFeatureResult r = detect_head_features(mesh, options);
   const auto points = by_name(r);
   ASSERT_TRUE(points.count("nose.tip"));
@@ -220,6 +222,18 @@ INSTANTIATE_TEST_SUITE_P(HeadMeshes, RealHead,
                                            HeadCase{"nefertiti.obj", true, {}},
                                            HeadCase{"max_planck_decimated.obj", true, {"eye", "lips"}},
                                            HeadCase{"igea_tristrips.ply", false, {"eye", "lips"}}),
+                         [](const auto& info) {
+                           std::string n = info.param.file;
+                           return n.substr(0, n.find('.'));
+                         });
+// The same checks with the physical scales of the end-to-end test (chosen on libigl's head fused at 3 mm; libigl's
+// source is the one the choice saw). Max Planck is left out: decimated to 7 mm edges (3 per rho), its right lip
+// corner moves to 1.8 rho from its mirror (held to 1.6) and an ear point to 1.2 rho (held to 1), measured in
+// bench/results/head.md; the paper's scales hold it above.
+INSTANTIATE_TEST_SUITE_P(HeadMeshesPhysicalScale, RealHead,
+                         ::testing::Values(HeadCase{"libigl_face_head.obj", true, {}, true},
+                                           HeadCase{"nefertiti.obj", true, {}, true},
+                                           HeadCase{"igea_tristrips.ply", false, {"eye", "lips"}, true}),
                          [](const auto& info) {
                            std::string n = info.param.file;
                            return n.substr(0, n.find('.'));
