@@ -15,8 +15,9 @@
 //   BM_FlattenMap               fusion::flatten of the room's map: sdf's per-call copy on a device backend
 //   BM_FramePyramid/<0 cpu|1 dev> the pipeline's tracking pyramid of one frame: build_frame_pyramid against
 //                               DeviceFramePyramid (upload, kernels, read-back)
-//   BM_Pipeline/<0 cpu|1 opencl> whole slam::Pipeline frames (combined registration) per backend: ms per stage
-//                               and fps, over kPipelineFrames frames after the first
+//   BM_Pipeline/<0 cpu|1 opencl|2 opencl, residency off> whole slam::Pipeline frames (combined registration) per
+//                               backend: ms per stage and fps, over kPipelineFrames frames after the first; on the
+//                               device also the maps bound in place / uploaded per frame (Context::residency_stats)
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -237,8 +238,11 @@ void BM_Pipeline(benchmark::State& state) {
   const hf::datasets::SyntheticSequence seq(options);
   hf::slam::PipelineConfig config;
   config.registration = "combined";
-  config.backend = state.range(0) == 1 ? "opencl" : "cpu";
+  config.backend = state.range(0) >= 1 ? "opencl" : "cpu";
   config.volume = volume_1cm();
+  const auto context = hf::opencl::Context::shared();
+  context->set_residency_enabled(state.range(0) != 2);
+  const hf::opencl::Context::ResidencyStats before = context->residency_stats();
   hf::slam::StageMs sum;
   double wall_ms = 0;
   int frames = 0;
@@ -268,8 +272,13 @@ void BM_Pipeline(benchmark::State& state) {
   state.counters["raycast_ms"] = sum.raycast / n;
   state.counters["other_ms"] = (sum.keyframe + sum.loop + sum.reintegrate) / n;
   state.counters["fps"] = 1e3 * n / wall_ms;
+  const hf::opencl::Context::ResidencyStats after = context->residency_stats();
+  const double all_frames = double(state.iterations()) * (kPipelineFrames + 1);
+  state.counters["maps_bound_per_frame"] = double(after.hits - before.hits) / all_frames;
+  state.counters["maps_uploaded_per_frame"] = double(after.misses - before.misses) / all_frames;
+  context->set_residency_enabled(true);
 }
-BENCHMARK(BM_Pipeline)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_Pipeline)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 }  // namespace
 

@@ -243,8 +243,9 @@ std::shared_ptr<Context> Context::shared() {
 
 std::shared_ptr<const void> Context::publish(const void* host, std::size_t bytes, const cl::Buffer& buffer) {
   if (host == nullptr || bytes == 0 || buffer() == nullptr) return nullptr;
-  auto copy = std::make_shared<const cl::Buffer>(buffer);
   std::lock_guard<std::mutex> lock(residency_mutex_);
+  if (!residency_enabled_) return nullptr;
+  auto copy = std::make_shared<const cl::Buffer>(buffer);
   // Entries whose holders dropped them go first: the table stays as small as the live copies.
   std::erase_if(residency_, [](const auto& entry) { return entry.second.copy.expired(); });
   residency_[host] = Residency{bytes, copy};
@@ -263,6 +264,12 @@ cl::Buffer Context::resident(const void* host, std::size_t bytes) {
   }
   ++residency_stats_.misses;
   return cl::Buffer();
+}
+
+void Context::set_residency_enabled(bool enabled) {
+  std::lock_guard<std::mutex> lock(residency_mutex_);
+  residency_enabled_ = enabled;
+  if (!enabled) residency_.clear();
 }
 
 Context::ResidencyStats Context::residency_stats() const {

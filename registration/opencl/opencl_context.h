@@ -115,6 +115,9 @@ class Context {
     std::uint64_t misses = 0;     // resident() calls that did not (the caller uploads the host bytes)
   };
   ResidencyStats residency_stats() const;
+  // On by default. Off, publish() publishes nothing (returns null), so every stage uploads what it reads as before
+  // residency: only for measuring what it saves (bench_fusion_opencl BM_Pipeline/2).
+  void set_residency_enabled(bool enabled);
 
  private:
   struct Residency {
@@ -136,6 +139,7 @@ class Context {
   mutable std::mutex residency_mutex_;
   std::map<const void*, Residency> residency_;
   ResidencyStats residency_stats_;
+  bool residency_enabled_ = true;
 };
 
 // Turns a cl::Error into hf::Error "WHAT: CALL: CL_NAME (code)"; any other exception is rethrown unchanged.

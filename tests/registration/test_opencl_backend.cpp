@@ -414,6 +414,12 @@ TEST(OpenClBackend, BindsTheDevicePyramidsMapsInsteadOfUploadingThem) {
   reg->align(current, reference, SE3());
   EXPECT_GT(counters->map_uploads(), 0u);
   EXPECT_EQ(counters->resident_binds(), 0u);
+  // Residency off (for measurements): nothing is published.
+  const auto ctx = opencl::Context::shared();
+  ctx->set_residency_enabled(false);
+  const FramePyramid unpublished = device.build(a.depth, &a.color, seq.camera());
+  ctx->set_residency_enabled(true);
+  for (const FramePyramidLevel& level : unpublished.levels) EXPECT_TRUE(level.device_copies.empty());
 }
 
 // build_model on the device against build_model_pyramid: the same float operations (z of the vertices, the
