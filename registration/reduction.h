@@ -75,6 +75,11 @@ class KernelBuffer {
   // The contents in the kernel's layout, built when first asked after a change; valid until the next change.
   // Never empty (a kernel reading an empty map gets a buffer it does not index).
   virtual std::pair<const void*, std::size_t> contents() const = 0;
+  // Where a device may hold these contents already: the key (the host object they mirror, the copy's size in
+  // bytes) under which the stage that keeps them there published its copy (core/device_copy.h; sdf: the device
+  // map's table and pool, DeviceVoxelGrid::publish_map). A device backend binds that copy, when there is one,
+  // instead of building and uploading contents(). {nullptr, 0}: none.
+  virtual std::pair<const void*, std::size_t> resident_key() const { return {nullptr, 0}; }
 };
 
 // A version for a KernelBuffer's new contents, unique in the process (thread-safe).

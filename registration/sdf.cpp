@@ -80,13 +80,17 @@ const DenseKernel kKernel = make_sdf_kernel();
 // The map in the kernel's flat layout (fusion/flat_block_map.h), built only when a device backend asks for it
 // (KernelBuffer): one copy of every block, once per map version (a set_volume or a pairwise fusion), whatever
 // the number of levels and iterations that read it. The table and the pool are two slots, two views of one copy.
+// The table has the grid's own hash geometry (bit_ceil(max(16, 2 capacity_blocks)) entries), which is the
+// device map's (fusion/opencl/device_voxel_grid.h): where the map lives on the device and its table and pool are
+// published as the grid's copy, the backend binds those (resident_key) and no copy is built or uploaded.
 class FlatMapCache {
  public:
   void set(const fusion::VoxelBlockGrid* grid) {
     grid_ = grid;
-    entries_ = fusion::flat_table_entries(grid->block_count());
+    entries_ = fusion::flat_table_entries(std::max(grid->block_count(), grid->params().capacity_blocks));
     version_ = new_kernel_buffer_version();
   }
+  const fusion::VoxelBlockGrid* grid() const { return grid_; }
   std::uint64_t version() const { return version_; }
   // The table's size, known before the copy is built (the kernel's parameters need it per level).
   size_t entries() const { return entries_; }
@@ -106,6 +110,12 @@ class FlatMapCache {
       const fusion::FlatBlockMap& f = cache_.flat();
       if (table_) return {f.table.data(), f.table.size() * sizeof(hf_block_entry)};
       return {f.pool.data(), f.pool.size() * sizeof(fusion::Voxel)};
+    }
+    std::pair<const void*, std::size_t> resident_key() const override {
+      const fusion::VoxelBlockGrid* grid = cache_.grid();
+      if (grid == nullptr) return {nullptr, 0};
+      return {grid, table_ ? cache_.entries() * sizeof(hf_block_entry)
+                           : grid->params().capacity_blocks * sizeof(fusion::VoxelBlock)};
     }
 
    private:

@@ -95,6 +95,17 @@ void take_intensity(FramePyramid& from, FramePyramid* to) {
   }
 }
 
+// A frame's tracking pyramid: on the device where there is one (the pyramid stays there for the reductions), else
+// on the host.
+FramePyramid frame_pyramid([[maybe_unused]] opencl::DeviceFramePyramid* device, const DepthImage& depth,
+                           const ColorImage& colour, const PinholeCamera& camera, const FramePyramidOptions& options) {
+  const ColorImage* c = colour.empty() ? nullptr : &colour;
+#ifdef HF_HAVE_FUSION_OPENCL
+  if (device != nullptr) return device->build(depth, c, camera, options);
+#endif
+  return build_frame_pyramid(depth, c, camera, options);
+}
+
 // The reference pyramid of the model maps: on the device where the raycast left them there (the device pyramid
 // binds their copies, and the levels stay there for the reduction), else on the host.
 FramePyramid model_pyramid([[maybe_unused]] opencl::DeviceFramePyramid* device, const fusion::RaycastResult& model,
@@ -273,13 +284,7 @@ FramePyramid Pipeline::preprocess(const RgbdFrame& frame, FrameResult* r) const 
   const auto t0 = std::chrono::steady_clock::now();
   FramePyramidOptions po = config_.pyramid;
   po.first_level = config_.tracking_level;
-  const ColorImage* colour = frame.color.empty() ? nullptr : &frame.color;
-#ifdef HF_HAVE_FUSION_OPENCL
-  FramePyramid p = device_pyramid_ ? device_pyramid_->build(frame.depth, colour, camera_, po)
-                                   : build_frame_pyramid(frame.depth, colour, camera_, po);
-#else
-  FramePyramid p = build_frame_pyramid(frame.depth, colour, camera_, po);
-#endif
+  FramePyramid p = frame_pyramid(device_pyramid_.get(), frame.depth, frame.color, camera_, po);
   r->ms.preprocess = ms_since(t0);
   return p;
 }
@@ -412,7 +417,7 @@ std::optional<Pipeline::Verdict> Pipeline::relocalise(const RgbdFrame& frame, co
     if (m.id >= keyframes_.size() || !keyframes_.has_images(m.id)) continue;
     const DepthImage kd = keyframes_.depth(m.id);
     const ColorImage kc = keyframes_.colour(m.id);
-    const FramePyramid kp = build_frame_pyramid(kd, kc.empty() ? nullptr : &kc, camera_, po);
+    const FramePyramid kp = frame_pyramid(device_pyramid_.get(), kd, kc, camera_, po);
     const RegistrationResult reg = reg_method.align(current, kp, SE3());
     if (!reg.usable() || reg.degenerate_dims > config_.max_degenerate_dims) continue;
     const Consistency c = depth_consistency(current.levels[0].vertices, depth_of(kp.levels[0].vertices),
@@ -493,7 +498,7 @@ void Pipeline::close_loops(const RgbdFrame& frame, FrameResult* r) {
   const size_t k = keyframes_.size() - 1;
   FramePyramidOptions po = config_.pyramid;
   po.first_level = config_.tracking_level;
-  FramePyramid kp = build_frame_pyramid(frame.depth, frame.color.empty() ? nullptr : &frame.color, camera_, po);
+  FramePyramid kp = frame_pyramid(device_pyramid_.get(), frame.depth, frame.color, camera_, po);
   measure_odometry_edge(kp);
   std::vector<size_t> candidates;
   if (k > 0) {
@@ -512,7 +517,7 @@ void Pipeline::close_loops(const RgbdFrame& frame, FrameResult* r) {
   for (size_t c : candidates) {
     const DepthImage cd = keyframes_.depth(c);
     const ColorImage cc = keyframes_.colour(c);
-    const FramePyramid cp = build_frame_pyramid(cd, cc.empty() ? nullptr : &cc, camera_, po);
+    const FramePyramid cp = frame_pyramid(device_pyramid_.get(), cd, cc, camera_, po);
     const SE3 guess = keyframes_[c].T_world_camera.inverse() * keyframes_[k].T_world_camera;
     const std::optional<RegistrationResult> reg = register_keyframes(verifier, kp, cp, guess);
     if (!reg) continue;
@@ -700,6 +705,14 @@ RegistrationResult Pipeline::align_to_model(Registration& method, const FramePyr
     return method.align(current, reference_->pyramid, guess);
   }
   method.set_volume(&grid_, reference_->T_world_model);
+  DeviceCopies map_copies;  // the device map as grid_'s copy for this call (a device backend reads it in place)
+#ifdef HF_HAVE_FUSION_OPENCL
+  if (device_map_) {
+    if (device_map_stale_) device_map_->load(grid_);
+    device_map_stale_ = false;
+    map_copies = device_map_->publish_map(grid_);
+  }
+#endif
   RegistrationResult result = method.align(current, FramePyramid{}, guess);
   method.set_volume(nullptr, SE3());
   return result;

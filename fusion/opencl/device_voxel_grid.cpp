@@ -76,6 +76,15 @@ struct DeviceVoxelGrid::Impl {
   // The tokens of the last raycast's published outputs (depth, vertices, normals): while a holder keeps one, the
   // next raycast writes new buffers (a published copy is never written again).
   std::vector<std::weak_ptr<const void>> rc_published;
+  // The tokens of publish_map(): the map is not written while a holder keeps one.
+  std::vector<std::weak_ptr<const void>> map_published;
+  void check_map_unpublished(const char* what) const {
+    for (const auto& t : map_published)
+      if (!t.expired())
+        throw Error(std::string("DeviceVoxelGrid::") + what +
+                    ": the map's table and pool are published as a host grid's copy (publish_map) and must not change "
+                    "while their holder keeps them: drop the copies first");
+  }
   size_t rc_pixels = 0, rc_tiles = 0;
   DeviceVoxelGrid::RaycastTimes rc_times;
   size_t entries = 0;
@@ -208,6 +217,7 @@ std::string DeviceVoxelGrid::device_name() const {
 
 void DeviceVoxelGrid::clear() {
   Impl& m = *impl_;
+  m.check_map_unpublished("clear");
   try {
     cl::CommandQueue& q = m.ctx->queue();
     q.enqueueFillBuffer(m.table, std::uint32_t(0), 0, m.entries * sizeof(Entry));
@@ -234,6 +244,7 @@ IntegrateStats DeviceVoxelGrid::integrate(const DepthImage& depth, const ColorIm
                                           const IntegrateParams& params) {
   detail::check_frame_sizes(depth, colour, camera);
   Impl& m = *impl_;
+  m.check_map_unpublished("integrate");
   IntegrateStats stats;
   m.last_visible = 0;
   const size_t n_pixels = size_t(depth.width()) * size_t(depth.height());
@@ -374,6 +385,7 @@ void DeviceVoxelGrid::check_host_grid(const VoxelBlockGrid& grid) const {
 void DeviceVoxelGrid::load(const VoxelBlockGrid& grid) {
   check_host_grid(grid);
   Impl& m = *impl_;
+  m.check_map_unpublished("load");
   const auto blocks = grid.blocks();
   if (blocks.size() > params_.capacity_blocks)
     throw CapacityError("DeviceVoxelGrid::load: the host grid holds " + std::to_string(blocks.size()) +
@@ -408,6 +420,22 @@ void DeviceVoxelGrid::load(const VoxelBlockGrid& grid) {
     opencl::rethrow_as_hf_error(m.where());
   }
   m.pool_next = std::uint32_t(blocks.size());
+}
+
+DeviceCopies DeviceVoxelGrid::publish_map(const VoxelBlockGrid& mirror) const {
+  check_host_grid(mirror);
+  Impl& m = *impl_;
+  m.ctx->queue().finish();  // the map holds what every enqueued write left in it
+  DeviceCopies copies;
+  const std::pair<size_t, const cl::Buffer*> parts[] = {{m.entries * sizeof(Entry), &m.table},
+                                                         {params_.capacity_blocks * sizeof(VoxelBlock), &m.pool}};
+  for (const auto& [bytes, buffer] : parts) {
+    std::shared_ptr<const void> token = m.ctx->publish(&mirror, bytes, *buffer);
+    m.map_published.push_back(token);
+    copies.add(&mirror, std::move(token));
+  }
+  std::erase_if(m.map_published, [](const auto& t) { return t.expired(); });
+  return copies;
 }
 
 size_t DeviceVoxelGrid::read_into(VoxelBlockGrid& grid) const {

@@ -38,6 +38,7 @@
 #include <string>
 
 #include "core/camera.h"
+#include "core/device_copy.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/se3.h"
@@ -95,6 +96,14 @@ class DeviceVoxelGrid {
   // when the blocks do not fit the pool or the probe bound.
   void load(const VoxelBlockGrid& grid);
   void clear();
+  // Publishes the map's table and pool (the flat layout of fusion/kernels/block_hash.h, the table with
+  // `mirror`'s hash geometry) on the context as the copy of `mirror` (core/device_copy.h; keys (&mirror, table
+  // bytes) and (&mirror, pool bytes), what sdf's KernelBuffer::resident_key asks for), so a kernel that reads the
+  // host grid in the flat layout reads the device map in place. The caller vouches that `mirror` holds the same
+  // blocks (the host copy it keeps with read_last_frame_into / load) and keeps the returned copies only while both
+  // stay unchanged: integrate(), load() and clear() throw hf::Error while a holder keeps them. Same parameter
+  // check as read_into.
+  DeviceCopies publish_map(const VoxelBlockGrid& mirror) const;
 
   // The tracking raycast of fusion/raycast.h on the device map (fusion/opencl/raycast.cl: the range image, the
   // march with cheap steps, jumps over missing blocks and empty 4^3-block regions, one-step crossings of

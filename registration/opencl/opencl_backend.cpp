@@ -145,12 +145,22 @@ void OpenClReductionBackend::upload_inputs(const ResidualProblem& p, cl::Kernel&
     Slot& s = slots_[i];
     const std::uint64_t version = b->version();
     if (s.buffer_source != b || s.buffer_version != version || s.source == nullptr) {
+      s.buffer_source = b;
+      s.buffer_version = version;
+      // Kept on this device by the stage that owns it (sdf: the device map's table and pool): bind it in place.
+      if (const auto [key, key_bytes] = b->resident_key(); key != nullptr) {
+        if (cl::Buffer copy = context_->resident(key, key_bytes); copy() != nullptr) {
+          s.source = key;
+          s.bytes = key_bytes;
+          s.bound = copy;
+          ++resident_binds_;
+          continue;
+        }
+      }
       const auto [data, bytes] = b->contents();
       if (data == nullptr || bytes == 0) throw Error("OpenCL backend: kernel buffer in slot " +
                                                      std::string(reg_input_name(i)) + " is empty");
       slot_buffer(i, data, bytes);
-      s.buffer_source = b;
-      s.buffer_version = version;
       ++buffer_uploads_;
     }
   }

@@ -248,15 +248,15 @@ std::shared_ptr<const void> Context::publish(const void* host, std::size_t bytes
   auto copy = std::make_shared<const cl::Buffer>(buffer);
   // Entries whose holders dropped them go first: the table stays as small as the live copies.
   std::erase_if(residency_, [](const auto& entry) { return entry.second.copy.expired(); });
-  residency_[host] = Residency{bytes, copy};
+  residency_[{host, bytes}] = Residency{copy};
   ++residency_stats_.published;
   return copy;
 }
 
 cl::Buffer Context::resident(const void* host, std::size_t bytes) {
   std::lock_guard<std::mutex> lock(residency_mutex_);
-  auto it = residency_.find(host);
-  if (it != residency_.end() && it->second.bytes == bytes) {
+  auto it = residency_.find({host, bytes});
+  if (it != residency_.end()) {
     if (const std::shared_ptr<const cl::Buffer> copy = it->second.copy.lock()) {
       ++residency_stats_.hits;
       return *copy;

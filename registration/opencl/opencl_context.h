@@ -31,6 +31,7 @@
 #include <mutex>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 // The bindings' version macros must agree in every translation unit: they are set by CMake on
@@ -101,12 +102,13 @@ class Context {
 
   // Residency (core/device_copy.h): which host images already have a copy on this device. A stage that made an
   // image here and read it back publishes the buffer as the copy of the host bytes [host, host + bytes) and gets a
-  // token; the entry holds while the token lives (the image's holder keeps it, DeviceCopies), and so does the
+  // token (a copy of a host object in another layout, such as a map's table and pool, is published under the
+  // object's address and the copy's size: KernelBuffer::resident_key); the entry holds while the token lives (the image's holder keeps it, DeviceCopies), and so does the
   // buffer. The buffer must hold those bytes when published (the producer's queue finished) and must not be written
   // afterwards: a producer allocates new buffers for its next output. A later publish for the same host bytes
   // replaces the entry. Thread-safe.
   std::shared_ptr<const void> publish(const void* host, std::size_t bytes, const cl::Buffer& buffer);
-  // The published copy of exactly [host, host + bytes) whose token still lives, else a null buffer (buffer() ==
+  // The published copy of (host, bytes) whose token still lives, else a null buffer (buffer() ==
   // nullptr). Counted in residency_stats().
   cl::Buffer resident(const void* host, std::size_t bytes);
   struct ResidencyStats {
@@ -121,7 +123,6 @@ class Context {
 
  private:
   struct Residency {
-    std::size_t bytes = 0;
     std::weak_ptr<const cl::Buffer> copy;
   };
   struct Built {
@@ -137,7 +138,7 @@ class Context {
   std::mutex mutex_;
   std::map<std::string, Built> programs_;
   mutable std::mutex residency_mutex_;
-  std::map<const void*, Residency> residency_;
+  std::map<std::pair<const void*, std::size_t>, Residency> residency_;  // by (host, bytes)
   ResidencyStats residency_stats_;
   bool residency_enabled_ = true;
 };

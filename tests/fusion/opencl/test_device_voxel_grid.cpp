@@ -15,7 +15,10 @@
 
 #include "datasets/synthetic_sequence.h"
 #include "fusion/integrate.h"
+#include "registration/frame_pyramid.h"
+#include "registration/opencl/opencl_backend.h"
 #include "registration/opencl/opencl_context.h"
+#include "registration/registration.h"
 #include "slam/pipeline.h"
 
 namespace hf::fusion {
@@ -306,6 +309,51 @@ TEST(DeviceVoxelGrid, RaycastCopiesHoldTheirImagesUntilDropped) {
   EXPECT_FALSE(device_image(copied.vertices).first);
 }
 
+// sdf aligns to the map: where the map lives on the device, publish_map lends its table and pool as the host
+// mirror's copy and the OpenCL backend reads them in place (no flat copy built or uploaded). The same frame
+// registered against the same map through the uploaded flat copy gives the same pose bit for bit (the same voxels,
+// found through a table of the same geometry). While the copies are held the device map refuses to change.
+TEST(DeviceVoxelGrid, SdfReadsTheDeviceMapInPlace) {
+  HF_CONTEXT_OR_SKIP(ctx);
+  const VolumeParams volume = params_1cm();
+  const PinholeCamera camera = small_camera();
+  const auto seq = room(6);
+  DeviceVoxelGrid device(volume, ctx);
+  for (int i = 0; i < 4; ++i) {
+    const auto f = seq.frame(i);
+    device.integrate(f.depth, f.color, camera, f.T_world_camera);
+  }
+  VoxelBlockGrid mirror(volume);
+  device.read_into(mirror);
+  const auto ref = seq.frame(3), cur = seq.frame(5);
+  FramePyramidOptions po;
+  const FramePyramid current = build_frame_pyramid(cur.depth, &cur.color, camera, po);
+  const SE3 truth = ref.T_world_camera.inverse() * cur.T_world_camera;
+  RegistrationResult results[2];
+  for (int resident = 0; resident < 2; ++resident) {
+    auto backend = std::make_unique<opencl::OpenClReductionBackend>(ctx);
+    const opencl::OpenClReductionBackend* counters = backend.get();
+    const auto sdf = make_registration("sdf", default_registration_options("sdf"), std::move(backend));
+    DeviceCopies copies;
+    if (resident == 1) copies = device.publish_map(mirror);
+    sdf->set_volume(&mirror, ref.T_world_camera);
+    results[resident] = sdf->align(current, FramePyramid{}, SE3());
+    EXPECT_EQ(counters->buffer_uploads(), resident == 1 ? 0u : 2u);
+    EXPECT_EQ(counters->resident_binds() > 0, resident == 1);
+    if (resident == 1) {
+      const auto f = seq.frame(4);
+      EXPECT_THROW(device.integrate(f.depth, f.color, camera, f.T_world_camera), Error);
+      EXPECT_THROW(device.clear(), Error);
+    }
+  }
+  EXPECT_EQ(results[0].status, results[1].status);
+  EXPECT_EQ((results[0].T_ref_cur.matrix() - results[1].T_ref_cur.matrix()).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LT((results[1].T_ref_cur.translation() - truth.translation()).norm(), 0.01);
+  // The copies dropped, the map changes again.
+  const auto f = seq.frame(4);
+  EXPECT_NO_THROW(device.integrate(f.depth, f.color, camera, f.T_world_camera));
+}
+
 TEST(DeviceVoxelGrid, PoolExhaustionIsCapacityErrorWithNothingUpdated) {
   HF_CONTEXT_OR_SKIP(ctx);
   const VolumeParams volume = params_1cm(32);
@@ -382,7 +430,7 @@ TEST(DeviceVoxelGrid, PipelineOnTheDeviceMatchesTheCpuPipeline) {
   HF_CONTEXT_OR_SKIP(ctx);
   const PinholeCamera camera = small_camera();
   const auto seq = room(4);
-  for (const std::string registration : {"groundtruth", "combined"}) {
+  for (const std::string registration : {"groundtruth", "combined", "sdf"}) {
     std::vector<SE3> poses[2];
     VoxelBlockGrid maps[2] = {VoxelBlockGrid(params_1cm()), VoxelBlockGrid(params_1cm())};
     for (int b = 0; b < 2; ++b) {
