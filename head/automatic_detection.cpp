@@ -3,14 +3,17 @@
 namespace hf::head {
 
 AreaFeatures detect_area_features(const ImportantAreas& areas, const VertexCurvatures& discrete,
-                                  const VertexCurvatures& mls) {
+                                  const VertexCurvatures& mls, double mls_truncate_percent) {
   const size_t n = areas.label.size();
   AreaFeatures out;
   out.features.assign(n, 0);
   std::vector<float> lips_mean = discrete.mean;
   truncate_top_percent(lips_mean, discrete.valid, 5.0);
-  const std::vector<float> eyes = normalise_percent(mls.k_max, mls.valid);
-  const std::vector<float> ears = normalise_percent(mls.mean, mls.valid);
+  std::vector<float> eyes_k = mls.k_max, ears_h = mls.mean;
+  truncate_top_percent(eyes_k, mls.valid, mls_truncate_percent);
+  truncate_top_percent(ears_h, mls.valid, mls_truncate_percent);
+  const std::vector<float> eyes = normalise_percent(eyes_k, mls.valid);
+  const std::vector<float> ears = normalise_percent(ears_h, mls.valid);
   const std::vector<float> lips = normalise_percent(lips_mean, discrete.valid);
   const std::vector<float> nose = normalise_percent(discrete.k_max, discrete.valid);
   for (int a = 1; a < kAreaCount; ++a) {

@@ -19,7 +19,10 @@ struct AreaFeatures {
 };
 
 // `mls` must be valid on the eye and ear areas (mls_curvature(..., only = those areas) is enough).
+// mls_truncate_percent > 0 truncates the eyes' and ears' MLS evaluations' top percentage first, as the lips' (the
+// paper does not; head_features.h's physical scales do: on a fused head a few spikes in an eye area lift its average
+// above all but a handful of vertices, bench/results/head.md).
 AreaFeatures detect_area_features(const ImportantAreas& areas, const VertexCurvatures& discrete,
-                                  const VertexCurvatures& mls);
+                                  const VertexCurvatures& mls, double mls_truncate_percent = 0.0);
 
 }  // namespace hf::head

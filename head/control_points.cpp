@@ -52,12 +52,15 @@ std::vector<int> members(const ImportantAreas& areas, Area a, const VertexMask* 
 
 // The features of area a, or the whole area when it has none. With `largest_piece`, only the largest connected
 // piece of the features: stray feature vertices (skin texture, scan noise) would otherwise set the extremes.
+// With `eligible`, the largest piece among those holding a vertex it accepts (the lips: a piece that reaches the
+// symmetry plane), else the largest piece.
 std::vector<int> feature_set(const ImportantAreas& areas, Area a, const VertexMask& features,
-                             const MeshTopology* largest_piece = nullptr) {
+                             const MeshTopology* largest_piece = nullptr,
+                             const std::function<bool(int)>& eligible = nullptr) {
   std::vector<int> set = members(areas, a, &features);
   if (set.empty()) return members(areas, a, nullptr);
   if (!largest_piece) return set;
-  std::vector<int> piece(areas.label.size(), -1), best, current, stack;
+  std::vector<int> piece(areas.label.size(), -1), best, best_eligible, current, stack;
   for (int s : set) {
     if (piece[s] >= 0) continue;
     current.clear();
@@ -74,8 +77,10 @@ std::vector<int> feature_set(const ImportantAreas& areas, Area a, const VertexMa
         }
     }
     if (current.size() > best.size()) best = current;
+    if (eligible && current.size() > best_eligible.size() && std::any_of(current.begin(), current.end(), eligible))
+      best_eligible = current;
   }
-  return best;
+  return best_eligible.empty() ? best : best_eligible;
 }
 
 void eye(Context& c, const ImportantAreas& areas, const VertexMask& features, Area a) {
@@ -97,7 +102,11 @@ void eye(Context& c, const ImportantAreas& areas, const VertexMask& features, Ar
 }
 
 void lips(Context& c, const ImportantAreas& areas, const VertexMask& features) {
-  const std::vector<int> set = feature_set(areas, Area::lips, features, &c.topology);
+  // The mouth straddles the symmetry plane: on a noisy (fused) mesh a patch of speckle on a cheek can outgrow the
+  // lips' own piece, never on the plane.
+  const double near_plane = 0.25 * c.frame.cap_scale * c.frame.scale;
+  const std::vector<int> set = feature_set(areas, Area::lips, features, &c.topology,
+                                           [&](int v) { return std::abs(c.ph[v].x()) <= near_plane; });
   const std::vector<int> area = members(areas, Area::lips, nullptr);
   if (set.empty()) return;
   const int right = c.best(set, [](const Eigen::Vector3d& p) { return p.x(); });

@@ -13,7 +13,9 @@
 //     the profile vertex halfway between them, the alae (extreme x of the nose's features), the subnasale
 //     (deepest profile vertex between the tip and the nose/lips boundary) and each nostril (the nose feature
 //     below the tip nearest the midpoint of that side's ala and the subnasale).
-// Eyes and lips use the largest connected piece of their features (stray vertices would set the extremes).
+// Eyes and lips use the largest connected piece of their features (stray vertices would set the extremes); the
+// lips the largest piece that reaches within 0.25 rho of the symmetry plane (the mouth straddles it; a speckle
+// patch on a fused head's cheek outgrew the lips once, bench/results/head.md), the largest piece when none does.
 // "Within a band": candidates within max(1.5, 5 % of the corner distance) mean edge lengths of the target x (or
 // z), widened up to 8x when empty. A point whose area (or features) is empty is not reported; the caller lists it
 // as missing.

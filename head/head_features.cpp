@@ -64,6 +64,7 @@ void use_physical_scale(HeadFeatureOptions& options) {
   options.evaluation_sigma_rho = 0.05;
   options.mls_h_rho = 0.5;
   options.areas.root_fraction = 0.3;
+  options.mls_truncate_percent = 5.0;
 }
 
 HeadFeatureResult detect_head_features(const TriangleMesh& mesh, const HeadFeatureOptions& options) {
@@ -120,7 +121,7 @@ HeadFeatureResult detect_head_features(const TriangleMesh& mesh, const HeadFeatu
     r.threshold_a = options.has_threshold ? options.threshold.a
                                           : static_cast<float>(masked_mean(r.evaluation_percent, *valid));
     r.threshold_b = options.has_threshold ? options.threshold.b : 100.0f;
-    r.area_features = detect_area_features(r.areas, r.discrete, r.mls);
+    r.area_features = detect_area_features(r.areas, r.discrete, r.mls, options.mls_truncate_percent);
     if (options.automatic) {
       r.features = r.area_features.features;
     } else {

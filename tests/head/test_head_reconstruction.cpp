@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
@@ -73,6 +74,7 @@ struct Config {
   double second_elevation_deg = std::numeric_limits<double>::quiet_NaN();
   double second_sweep_deg = 360.0;  // the second ring's arc, centred on the face
   bool physical = false;  // head_features.h's use_physical_scale() on both meshes, else the paper's scales
+  std::uint64_t seed = 0;  // the sensor noise's (the second ring's is seed + 1)
 };
 
 Outcome reconstruct(const TriangleMesh& source, const Config& config) {
@@ -98,6 +100,7 @@ Outcome reconstruct(const TriangleMesh& source, const Config& config) {
   orbit.up_world = on_source.frame.R_head_input.row(2).transpose();
   orbit.camera = PinholeCamera::preset("ros").scaled(1);  // 320 x 240
   if (!config.noise) orbit.noise = datasets::NoiseOptions::none();
+  orbit.seed = config.seed;
   // Pixels beyond 70 degrees of incidence are dropped (the sensor model's default keeps them up to 80): the axial
   // noise grows as theta^2 / (pi/2 - theta)^2, about 1 cm at 80 degrees and 0.45 m, and the fins those pixels fuse
   // at the head's silhouettes win the nose-tip search (bench/results/head.md has both).
@@ -160,13 +163,22 @@ Outcome reconstruct(const TriangleMesh& source, const Config& config) {
               1e3 * on_fused.frame.cap_scale, 1e3 * scale * on_source.frame.mean_edge_length, 1e3 * on_fused.frame.mean_edge_length);
   for (const HeadFeatureResult* r : {&on_source, &on_fused}) {
     const double mm = 1e3 * (r == &on_source ? scale : 1.0) / r->frame.scale;  // head units -> mm
-    std::printf("  %s: k %d, root z %.1f y %.1f, nose half-width %.1f, z eyes/nose %.1f mm, nose/lips %.1f mm, areas eyes %d/%d nose %d lips %d, features %d/%d/%d/%d\n",
+    std::printf("  %s: k %d, root z %.1f y %.1f, nose half-width %.1f, z eyes/nose %.1f mm, nose/lips %.1f mm, areas eyes %d/%d nose %d lips %d, features %d/%d/%d/%d, thresholds %.1f/%.1f/%.1f/%.1f %%\n",
                 r == &on_source ? "source" : "fused", r->areas.k, r->areas.z_root * mm, r->areas.y_root * mm, r->areas.nose_half_width * mm, r->areas.z_eyes_nose * mm, r->areas.z_nose_lips * mm,
                 r->areas.counts[1], r->areas.counts[2], r->areas.counts[3], r->areas.counts[4],
                 [&] { int c = 0; for (size_t i = 0; i < r->areas.label.size(); ++i) c += r->areas.label[i] == Area::eye_right && r->area_features.features[i]; return c; }(),
                 [&] { int c = 0; for (size_t i = 0; i < r->areas.label.size(); ++i) c += r->areas.label[i] == Area::eye_left && r->area_features.features[i]; return c; }(),
                 [&] { int c = 0; for (size_t i = 0; i < r->areas.label.size(); ++i) c += r->areas.label[i] == Area::nose && r->area_features.features[i]; return c; }(),
-                [&] { int c = 0; for (size_t i = 0; i < r->areas.label.size(); ++i) c += r->areas.label[i] == Area::lips && r->area_features.features[i]; return c; }());
+                [&] { int c = 0; for (size_t i = 0; i < r->areas.label.size(); ++i) c += r->areas.label[i] == Area::lips && r->area_features.features[i]; return c; }(),
+                r->area_features.threshold_percent[1], r->area_features.threshold_percent[2], r->area_features.threshold_percent[3], r->area_features.threshold_percent[4]);
+  }
+  if (std::getenv("HF_HEAD_E2E_POINTS")) {  // head-frame mm (the source's frame) of both meshes' points
+    for (const ControlPoint& c : on_fused.control_points)
+      if (auto it = std::find_if(on_source.control_points.begin(), on_source.control_points.end(), [&](const ControlPoint& s) { return s.name == c.name; }); it != on_source.control_points.end()) {
+        const Eigen::Vector3d a = 1e3 * (on_source.frame.R_head_input * (to_world(it->position) - to_world(on_source.frame.origin_input.cast<float>())));
+        const Eigen::Vector3d b = 1e3 * (on_source.frame.R_head_input * (c.position.cast<double>() - to_world(on_source.frame.origin_input.cast<float>())));
+        std::printf("    %-24s source %+6.1f %+6.1f %+6.1f  fused %+6.1f %+6.1f %+6.1f mm\n", c.name.c_str(), a.x(), a.y(), a.z(), b.x(), b.y(), b.z());
+      }
   }
   out.source_points = int(on_source.control_points.size()), out.fused_points = int(on_fused.control_points.size());
   std::map<std::string, Eigen::Vector3d> expected;
@@ -254,7 +266,7 @@ TEST(HeadReconstruction, OneRingAtThePapersScales) {
   EXPECT_LE(o.median_vox(), 5.0);
 }
 
-// HF_HEAD_E2E_CONFIG="voxel_m,frames,elevation,second_elevation(nan: none),second_sweep,physical(0/1)" runs one
+// HF_HEAD_E2E_CONFIG="voxel_m,frames,elevation,second_elevation(nan: none),second_sweep,physical(0/1)[,seed]" runs one
 // configuration; HF_HEAD_E2E_REPORT=1 the rows of bench/results/head.md.
 TEST(HeadReconstruction, Report) {
   if (!std::filesystem::exists(kMesh)) GTEST_SKIP() << kMesh << " is absent (../shared not mounted)";
@@ -262,8 +274,10 @@ TEST(HeadReconstruction, Report) {
   if (const char* e = std::getenv("HF_HEAD_E2E_CONFIG")) {
     Config c;
     int physical = 0;
-    ASSERT_EQ(std::sscanf(e, "%lf,%d,%lf,%lf,%lf,%d", &c.voxel_m, &c.frames, &c.elevation_deg, &c.second_elevation_deg,
-                          &c.second_sweep_deg, &physical), 6) << "HF_HEAD_E2E_CONFIG: " << e;
+    unsigned seed = 0;
+    ASSERT_GE(std::sscanf(e, "%lf,%d,%lf,%lf,%lf,%d,%u", &c.voxel_m, &c.frames, &c.elevation_deg, &c.second_elevation_deg,
+                          &c.second_sweep_deg, &physical, &seed), 6) << "HF_HEAD_E2E_CONFIG: " << e;
+    c.seed = seed;
     c.physical = physical != 0;
     print("config", c, reconstruct(source, c));
   }
