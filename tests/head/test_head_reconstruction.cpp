@@ -192,9 +192,9 @@ Outcome reconstruct(const TriangleMesh& source, const Config& config) {
 }
 
 void print(const char* what, const Config& c, const Outcome& o) {
-  std::printf("%s: %s scales, %.1f mm voxels, %d frames, %s, incidence <= %.0f deg, elevation %.0f +- %.0f deg (second ring %.0f over %.0f deg): fused %zu vertices, frame axes cos %.2f %.2f %.2f, "
+  std::printf("%s: %s scales, seed %d, %.1f mm voxels, %d frames, %s, incidence <= %.0f deg, elevation %.0f +- %.0f deg (second ring %.0f over %.0f deg): fused %zu vertices, frame axes cos %.2f %.2f %.2f, "
               "control points %d (source %d), matched %zu, nose tip %.2f vox, median %.2f vox, within 2 vox %.0f %%\n",
-              what, c.physical ? "physical" : "paper's", c.voxel_m * 1e3, c.frames, c.noise ? "Kinect noise" : "no noise", c.max_incidence_deg, c.elevation_deg, c.swing_deg, c.second_elevation_deg, c.second_sweep_deg, o.fused_vertices,
+              what, c.physical ? "physical" : "paper's", int(c.seed), c.voxel_m * 1e3, c.frames, c.noise ? "Kinect noise" : "no noise", c.max_incidence_deg, c.elevation_deg, c.swing_deg, c.second_elevation_deg, c.second_sweep_deg, o.fused_vertices,
               o.axis_cos.x(), o.axis_cos.y(), o.axis_cos.z(), o.fused_points, o.source_points, o.distance_vox.size(), o.nose_tip_vox,
               o.median_vox(), 100 * o.fraction_within(2.0));
   std::map<std::string, std::vector<double>> groups;  // by area: eye_right, lips, nose, ...
@@ -233,8 +233,9 @@ TEST(HeadReconstruction, FusedControlPointsMatchTheSource) {
   const Outcome o = reconstruct(source, config);
   print("test", config, o);
   // Measured: frame cosines 1.00, nose tip 0.59 voxel, 47 of 52 points matched (the fused right ear is reported
-  // absent; a left flap is found and its 5 points lie ~24 voxels off: the fused pinna is not the source's ear),
+  // absent; a left flap is found, but on a fin behind and above the head: its 5 points lie ~24 voxels off),
   // median 1.69 voxels, 62 % within 2; per area eyes 1.09 / 0.96, nose 1.66 (8 points), lips 2.22, ear_left 23.8.
+  // Over 10 noise seeds the median spans 1.49 .. 2.43 voxels (8 of 10 within 2; bench/results/head.md).
   // Bounds: the 2 voxels on the median, the tip, the eyes and the nose; the lips at 3 voxels (one voxel
   // above what they reach). The ears are reported, not bounded.
   const double target = 2.0;
@@ -292,6 +293,14 @@ TEST(HeadReconstruction, Report) {
         c.physical = physical;
         print("report", c, reconstruct(source, c));
       }
+    // The test's configuration over noise seeds (0: the test; 2 and 8 showed what the eyes' truncation and the lips'
+    // plane rule fix; the others were not looked at before the choice).
+    for (std::uint64_t seed = 2; seed <= 18; seed += 2) {
+      Config c{0.003, 18, true, 70, 10, 0, -30, 120};
+      c.physical = true;
+      c.seed = seed;
+      print("report seed", c, reconstruct(source, c));
+    }
   }
 }
 
