@@ -154,7 +154,14 @@ nlohmann::json report_json(const TriangleMesh& mesh, const HeadFeatureResult& r,
                           {"separation_method", o.areas.separation_method},
                           {"z_eyes_nose_edges", r.areas.z_eyes_nose},
                           {"z_nose_lips_edges", r.areas.z_nose_lips},
+                          {"z_nose_root_edges", r.areas.z_root},
                           {"areas", areas}};
+  // The physical scales (head_features.h; all 0: the paper's scales).
+  j["physical_scale"] = {{"evaluation_sigma_rho", o.evaluation_sigma_rho},
+                         {"mls_h_rho", o.mls_h_rho},
+                         {"mls_truncate_percent", o.mls_truncate_percent},
+                         {"area_k_rho", o.areas.k_rho},
+                         {"eyes_nose_root_fraction", o.areas.root_fraction}};
   nlohmann::json morph = nlohmann::json::array();
   for (const MorphologyStep& s : o.morphology) morph.push_back(std::string(morphology_op_name(s.op)) + ":" + std::to_string(s.k));
   j["features"] = {{"mode", o.automatic ? "automatic (section 4.5)" : "manual"},

@@ -5,8 +5,9 @@
 // features run on the fused mesh. Its control points are compared, name by name, with those found on the source
 // mesh: the target is 2 voxels. Skipped without ../shared.
 //
-// The test runs a coarse configuration (3 mm voxels, 18 frames at 320 x 240, 0.45 m from the head, 10 degrees
-// above it) in seconds; with
+// The test runs 3 mm voxels, 18 frames at 320 x 240, 0.45 m from the head, 10 degrees above it, then 18 frames 30
+// degrees below over a 120-degree arc in front of the face, with head_features.h's physical scales, in seconds
+// (and the one-ring, paper-scale configuration it improved on); with
 // HF_HEAD_E2E_REPORT=1 it also runs the configurations of bench/results/head.md and prints their tables; with
 // HF_HEAD_E2E_WRITE=DIR it writes the fused and the (scaled) source mesh there as PLY.
 #include <gtest/gtest.h>
