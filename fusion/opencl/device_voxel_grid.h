@@ -112,8 +112,11 @@ class DeviceVoxelGrid {
   // headers): depth, vertices and normals in the camera frame into *out (images resized as raycast() does), the
   // trilinear colour with options.color (else black), the head-light shading with options.shade (from the
   // normals, on the host). It samples where raycast() does, so the two agree but for float rounding of the ray set-up
-  // (tests/fusion/opencl). Throws hf::Error as raycast() does for bad options, a bad camera or pose, and for
-  // OpenCL failures. last_raycast_times(): the range image (with the region set), the march, the read-back.
+  // (tests/fusion/opencl). The depth, vertex and normal maps stay on the device as the read-back images' copies
+  // (out->device_copies, core/device_copy.h): the model pyramid and the reductions on this context bind them; a
+  // later raycast never writes a copy a holder still keeps. Throws hf::Error as raycast() does for bad options, a
+  // bad camera or pose, and for OpenCL failures. last_raycast_times(): the range image (with the region set), the
+  // march, the read-back.
   void raycast(const PinholeCamera& camera, const SE3& T_world_camera, const RaycastOptions& options,
                RaycastResult* out) const;
   struct RaycastTimes {
