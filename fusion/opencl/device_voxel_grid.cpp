@@ -73,17 +73,12 @@ struct DeviceVoxelGrid::Impl {
   cl::Buffer rc_constants, rc_near, rc_far, rc_depth, rc_vertices, rc_normals, rc_hits, rc_hints;
   cl::Buffer rc_regions;  // the region occupancy set, `entries` slots
   cl::Buffer rc_colour;   // 3 bytes per pixel
-  // The tokens of the last raycast's published outputs (depth, vertices, normals): while a holder keeps one, the
-  // next raycast writes new buffers (a published copy is never written again).
-  std::vector<std::weak_ptr<const void>> rc_published;
-  // The tokens of publish_map(): the map is not written while a holder keeps one.
-  std::vector<std::weak_ptr<const void>> map_published;
+  // publish_map()'s copies: the map is not written while a holder keeps one.
   void check_map_unpublished(const char* what) const {
-    for (const auto& t : map_published)
-      if (!t.expired())
-        throw Error(std::string("DeviceVoxelGrid::") + what +
-                    ": the map's table and pool are published as a host grid's copy (publish_map) and must not change "
-                    "while their holder keeps them: drop the copies first");
+    if (ctx->published(table) || ctx->published(pool))
+      throw Error(std::string("DeviceVoxelGrid::") + what +
+                  ": the map's table and pool are published as a host grid's copy (publish_map) and must not change "
+                  "while their holder keeps them: drop the copies first");
   }
   size_t rc_pixels = 0, rc_tiles = 0;
   DeviceVoxelGrid::RaycastTimes rc_times;
@@ -429,12 +424,7 @@ DeviceCopies DeviceVoxelGrid::publish_map(const VoxelBlockGrid& mirror) const {
   DeviceCopies copies;
   const std::pair<size_t, const cl::Buffer*> parts[] = {{m.entries * sizeof(Entry), &m.table},
                                                          {params_.capacity_blocks * sizeof(VoxelBlock), &m.pool}};
-  for (const auto& [bytes, buffer] : parts) {
-    std::shared_ptr<const void> token = m.ctx->publish(&mirror, bytes, *buffer);
-    m.map_published.push_back(token);
-    copies.add(&mirror, std::move(token));
-  }
-  std::erase_if(m.map_published, [](const auto& t) { return t.expired(); });
+  for (const auto& [bytes, buffer] : parts) copies.add(&mirror, m.ctx->publish(&mirror, bytes, *buffer));
   return copies;
 }
 
@@ -544,12 +534,15 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
       m.rc_hints = cl::Buffer(c, CL_MEM_READ_ONLY, n_pixels * sizeof(float));
       m.rc_colour = cl::Buffer(c, CL_MEM_WRITE_ONLY, n_pixels * 3);
       m.rc_pixels = n_pixels;
-    } else if (std::any_of(m.rc_published.begin(), m.rc_published.end(), [](const auto& t) { return !t.expired(); })) {
-      m.rc_depth = cl::Buffer(c, CL_MEM_WRITE_ONLY, m.rc_pixels * sizeof(float));
-      m.rc_vertices = cl::Buffer(c, CL_MEM_WRITE_ONLY, m.rc_pixels * sizeof(hf_float4));
-      m.rc_normals = cl::Buffer(c, CL_MEM_WRITE_ONLY, m.rc_pixels * sizeof(hf_float4));
+    } else {
+      // A published copy is never written again: while anyone keeps the last outputs as a copy (the result, or the
+      // model pyramid's level 0 that shares them), the march writes new buffers.
+      if (m.ctx->published(m.rc_depth)) m.rc_depth = cl::Buffer(c, CL_MEM_WRITE_ONLY, m.rc_pixels * sizeof(float));
+      if (m.ctx->published(m.rc_vertices))
+        m.rc_vertices = cl::Buffer(c, CL_MEM_WRITE_ONLY, m.rc_pixels * sizeof(hf_float4));
+      if (m.ctx->published(m.rc_normals))
+        m.rc_normals = cl::Buffer(c, CL_MEM_WRITE_ONLY, m.rc_pixels * sizeof(hf_float4));
     }
-    m.rc_published.clear();
     if (n_tiles > m.rc_tiles) {
       m.rc_near = cl::Buffer(c, CL_MEM_READ_WRITE, n_tiles * sizeof(cl_uint));
       m.rc_far = cl::Buffer(c, CL_MEM_READ_WRITE, n_tiles * sizeof(cl_uint));
@@ -644,9 +637,7 @@ void DeviceVoxelGrid::raycast(const PinholeCamera& camera, const SE3& T_world_ca
     for (const Output& o : {Output{out->depth.data(), n_pixels * sizeof(float), &m.rc_depth},
                             Output{out->vertices.data(), n_pixels * sizeof(hf_float4), &m.rc_vertices},
                             Output{out->normals.data(), n_pixels * sizeof(hf_float4), &m.rc_normals}}) {
-      std::shared_ptr<const void> token = m.ctx->publish(o.host, o.bytes, *o.buffer);
-      m.rc_published.push_back(token);
-      out->device_copies.add(o.host, std::move(token));
+      out->device_copies.add(o.host, m.ctx->publish(o.host, o.bytes, *o.buffer));
     }
     if (options.shade) {
       // raycast.cpp's pixel write of the shading, on the host from the read-back normals: the same ray

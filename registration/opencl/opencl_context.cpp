@@ -266,6 +266,15 @@ cl::Buffer Context::resident(const void* host, std::size_t bytes) {
   return cl::Buffer();
 }
 
+bool Context::published(const cl::Buffer& buffer) {
+  std::lock_guard<std::mutex> lock(residency_mutex_);
+  for (const auto& [key, entry] : residency_) {
+    const std::shared_ptr<const cl::Buffer> copy = entry.copy.lock();
+    if (copy && (*copy)() == buffer()) return true;
+  }
+  return false;
+}
+
 void Context::set_residency_enabled(bool enabled) {
   std::lock_guard<std::mutex> lock(residency_mutex_);
   residency_enabled_ = enabled;

@@ -111,6 +111,9 @@ class Context {
   // The published copy of (host, bytes) whose token still lives, else a null buffer (buffer() ==
   // nullptr). Counted in residency_stats().
   cl::Buffer resident(const void* host, std::size_t bytes);
+  // Whether a live entry holds `buffer` (under any key): a producer that reuses its output buffers writes a new
+  // one instead while this holds (a consumer may have published the same buffer again for its own copy).
+  bool published(const cl::Buffer& buffer);
   struct ResidencyStats {
     std::uint64_t published = 0;  // publish() calls
     std::uint64_t hits = 0;       // resident() calls that found a copy

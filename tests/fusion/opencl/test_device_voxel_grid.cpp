@@ -16,6 +16,7 @@
 #include "datasets/synthetic_sequence.h"
 #include "fusion/integrate.h"
 #include "registration/frame_pyramid.h"
+#include "registration/opencl/device_pyramid.h"
 #include "registration/opencl/opencl_backend.h"
 #include "registration/opencl/opencl_context.h"
 #include "registration/registration.h"
@@ -298,6 +299,18 @@ TEST(DeviceVoxelGrid, RaycastCopiesHoldTheirImagesUntilDropped) {
       ASSERT_TRUE(found);
       EXPECT_EQ(std::memcmp(back.data(), map->data(), map->size() * sizeof(hf_float4)), 0);
     }
+  }
+  // The model pyramid's level 0 shares the raycast's buffers as its own images' copies: with the result's copies
+  // dropped, the next raycast still writes new buffers, and the level's copies keep their images.
+  opencl::DeviceFramePyramid pyramids(ctx);
+  const FramePyramid model = pyramids.build_model(second.vertices, second.normals, camera, 3);
+  second.device_copies.clear();
+  RaycastResult third;
+  device.raycast(camera, seq.frame(2).T_world_camera, RaycastOptions{}, &third);
+  for (const VertexMap* map : {&model.levels[0].vertices, &model.levels[0].normals}) {
+    const auto [found, back] = device_image(*map);
+    ASSERT_TRUE(found);
+    EXPECT_EQ(std::memcmp(back.data(), map->data(), map->size() * sizeof(hf_float4)), 0);
   }
   // The host raycast writes `first` in place: its copies go, nothing is bound for its images any more.
   raycast(cpu, camera, seq.frame(1).T_world_camera, RaycastOptions{}, &first);
