@@ -224,6 +224,8 @@ Context::Context(const std::string& device_spec) {
     device_ = chosen.device;
     context_ = cl::Context(device_);
     queue_ = cl::CommandQueue(context_, device_);
+    const char* residency = std::getenv("HF_OPENCL_RESIDENCY");
+    residency_enabled_ = residency == nullptr || std::string(residency) != "0";
   } catch (...) {
     rethrow_as_hf_error("creating the OpenCL context");
   }

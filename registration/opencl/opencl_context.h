@@ -120,8 +120,9 @@ class Context {
     std::uint64_t misses = 0;     // resident() calls that did not (the caller uploads the host bytes)
   };
   ResidencyStats residency_stats() const;
-  // On by default. Off, publish() publishes nothing (returns null), so every stage uploads what it reads as before
-  // residency: only for measuring what it saves (bench_fusion_opencl BM_Pipeline/2).
+  // On by default; HF_OPENCL_RESIDENCY=0 in the environment starts a context with it off. Off, publish() publishes
+  // nothing (returns null), so every stage uploads what it reads as before residency: for measuring what it saves
+  // (bench_fusion_opencl BM_Pipeline/2) and for ruling it out when device results differ.
   void set_residency_enabled(bool enabled);
 
  private:
