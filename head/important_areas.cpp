@@ -81,9 +81,11 @@ class Buckets {
 // so a vertex on it has, within r = max(0.4 rho, 2.5 edges) behind it (along -n), surface facing the other way
 // (the sheet's other side); a skull, a crown or hair is locally one sheet. Per side (|x| >= 2 rho, behind the face
 // y < -1.5 rho, -4 rho <= z <= 2.5 rho around the tip; border vertices excluded: an open cut is a sheet edge too),
-// the thin-sheet vertices are clustered (single linkage within r) and the largest cluster is the ear when it spans
-// at least kEarMinSpanRho rho (an ear is ~6 cm = 2.7 rho tall); else the side has no ear (covered by hair, not
-// scanned) and says so. The ear area is the area mask and the flap within 1.5 rho of the flap's centroid,
+// the thin-sheet vertices are clustered (single linkage within r) and the ear is the largest cluster that spans
+// at least kEarMinSpanRho rho (an ear is ~6 cm = 2.7 rho tall) and whose centre lies where an ear can
+// (ear_implausible: a TSDF fuses fins at a head's silhouette behind and above it, flaps as much as a pinna, and on
+// fused heads those were the largest pieces: 24-38 voxels from the source's ear); else the side has no ear
+// (covered by hair, not scanned, only a fin) and says so, naming the rejected flap. The ear area is the area mask and the flap within 1.5 rho of the flap's centroid,
 // connected to the flap.
 // kEarMinSpanRho: chosen on the four source heads of ../shared/data/head_meshes (the ears' flaps span 1.78-2.79
 // rho, Igea's hair-covered sides hold no flap vertex at all); on heads fused at 2-4 mm voxels the TSDF thickens
@@ -91,9 +93,35 @@ class Buckets {
 // rho one fused ear landed on another piece, 17.6 voxels off).
 constexpr double kEarMinSpanRho = 1.0;
 
+}  // namespace
+
+// The bounds of important_areas.h's ear_implausible, in rho in the head frame; chosen on the four source heads
+// (the ears that are found: libigl's centres at y -6.3 / -5.8, z -0.9 / -2.6; Max Planck's y -6.7, z -3.4;
+// Nefertiti's y -3.6, z -1.8; Igea has none), reported on the fused heads (bench/results/head.md).
+constexpr double kEarMaxBehindRho = 7.5;
+constexpr double kEarMaxAboveRho = 0.5;
+
+std::string ear_implausible(const Eigen::Vector3d& c) {
+  char buf[200];
+  if (c.y() < -kEarMaxBehindRho) {
+    std::snprintf(buf, sizeof buf, "%.1f rho behind the nose tip, an ear's centre lies at most %.1f (behind it is the back of the head)",
+                  -c.y(), kEarMaxBehindRho);
+    return buf;
+  }
+  if (c.z() > kEarMaxAboveRho) {
+    std::snprintf(buf, sizeof buf, "%.1f rho above the nose tip, an ear's centre lies at most %.1f (above it is the cranium)",
+                  c.z(), kEarMaxAboveRho);
+    return buf;
+  }
+  return "";
+}
+
+namespace {
+
 void find_ears(const std::vector<Eigen::Vector3d>& ph, const std::vector<Eigen::Vector3d>& nh,
                const MeshTopology& topology, const VertexMask& area_mask, double rho, std::vector<Area>& label,
-               std::array<std::string, kAreaCount>& note, std::array<double, 2>& span_rho) {
+               std::array<std::string, kAreaCount>& note, std::array<double, 2>& span_rho,
+               std::array<Eigen::Vector3d, 2>& ear_centre_rho) {
   const int n = static_cast<int>(ph.size());
   const double r = std::max(0.4 * rho, 2.5);
   auto in_region = [&](int i) {
@@ -127,24 +155,53 @@ void find_ears(const std::vector<Eigen::Vector3d>& ph, const std::vector<Eigen::
   for (int i : thin) clusters[root(i)].push_back(i);
   for (int side = 0; side < 2; ++side) {
     const Area ear = side == 0 ? Area::ear_right : Area::ear_left;
-    const std::vector<int>* best = nullptr;
+    // This side's pieces, largest first (ties by vertex index: the order does not depend on the hash map's).
+    std::vector<const std::vector<int>*> pieces;
     for (const auto& [id, members] : clusters)
-      if ((ph[members.front()].x() > 0) == (side == 0) && (!best || members.size() > best->size())) best = &members;
-    double span = 0;
+      if ((ph[members.front()].x() > 0) == (side == 0)) pieces.push_back(&members);
+    std::sort(pieces.begin(), pieces.end(), [](const std::vector<int>* a, const std::vector<int>* b) {
+      return a->size() != b->size() ? a->size() > b->size() : a->front() < b->front();
+    });
+    const std::vector<int>* best = nullptr;
+    double span = 0, largest_span = 0;
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    if (best) {
-      for (int i : *best) centroid += ph[i];
-      centroid /= static_cast<double>(best->size());
-      for (int i : *best) span = std::max(span, 2.0 * (ph[i] - centroid).norm());
+    std::string rejected;  // the largest flap found where no ear can be, for the note
+    for (const std::vector<int>* piece : pieces) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (int i : *piece) c += ph[i];
+      c /= static_cast<double>(piece->size());
+      double s = 0;
+      for (int i : *piece) s = std::max(s, 2.0 * (ph[i] - c).norm());
+      if (piece == pieces.front()) largest_span = s;
+      if (s < kEarMinSpanRho * rho) continue;
+      const std::string why = ear_implausible(c / rho);
+      if (!why.empty()) {
+        if (rejected.empty()) {
+          char buf[200];
+          std::snprintf(buf, sizeof buf, "an ear-like flap spanning %.2f rho centred at x %+.2f y %+.2f z %+.2f rho was rejected: %s",
+                        s / rho, c.x() / rho, c.y() / rho, c.z() / rho, why.c_str());
+          rejected = buf;
+        }
+        continue;
+      }
+      best = piece;
+      span = s;
+      centroid = c;
+      break;
     }
-    span_rho[side] = span / rho;
-    if (!best || span < kEarMinSpanRho * rho) {
-      char buf[256];
-      std::snprintf(buf, sizeof buf,
-                    "no ear-like flap on the %s side of the head (largest thin-sheet piece spans %.2f rho, an ear "
-                    "needs %.1f): hair, a missing scan, or a pinna fused too thick to be a sheet; its control points are "
-                    "absent",
-                    side == 0 ? "right" : "left", span / rho, kEarMinSpanRho);
+    span_rho[side] = (best ? span : largest_span) / rho;
+    ear_centre_rho[side] = best ? Eigen::Vector3d(centroid / rho) : Eigen::Vector3d::Zero();
+    if (!best) {
+      char buf[512];
+      if (!rejected.empty())
+        std::snprintf(buf, sizeof buf, "no plausible ear on the %s side of the head (%s); its control points are absent",
+                      side == 0 ? "right" : "left", rejected.c_str());
+      else
+        std::snprintf(buf, sizeof buf,
+                      "no ear-like flap on the %s side of the head (largest thin-sheet piece spans %.2f rho, an ear "
+                      "needs %.1f): hair, a missing scan, or a pinna fused too thick to be a sheet; its control points are "
+                      "absent",
+                      side == 0 ? "right" : "left", largest_span / rho, kEarMinSpanRho);
       note[static_cast<int>(ear)] = buf;
       continue;
     }
@@ -195,7 +252,7 @@ ImportantAreas find_important_areas(const TriangleMesh& mesh, const MeshTopology
     const std::vector<Eigen::Vector3f> normals = mls_vertex_normals(mesh, topology);
     std::vector<Eigen::Vector3d> nh(n);
     for (int i = 0; i < n; ++i) nh[i] = frame.R_head_input * normals[i].cast<double>();
-    find_ears(ph, nh, topology, out.area_mask, rho, coarse, out.note, out.ear_flap_span_rho);
+    find_ears(ph, nh, topology, out.area_mask, rho, coarse, out.note, out.ear_flap_span_rho, out.ear_centre_rho);
   }
   // Step 4 on the face area.
   // The widest point is taken among step 1's features above the tip (the outer eye corners on the paper's

@@ -5,8 +5,9 @@
 //      15 above (the paper's experimental choice; `k` overrides it);
 //   3. the face area, bounded by a box in the head frame (sizes in rho, head_frame.h), and the ears: per side the
 //      largest thin-sheet piece (a flap: surface facing the other way right behind it, the pinna) beside and behind
-//      the face, when it spans at least 1 rho; a side without one (hair, not scanned) has no ear area and `note`
-//      says why (important_areas.cpp has the why of both);
+//      the face, when it spans at least 1 rho and its centre lies where an ear can (ear_implausible below; else the
+//      next largest that does); a side without one (hair, not scanned, only a fin fused behind the head) has no ear
+//      area and `note` says why (important_areas.cpp has the why of both);
 //   4. the face area is split in the head frame (head_frame.h; x towards the subject's right, y towards the
 //      nose, z up, origin at the nose tip). Method 1 (distance): eyes/nose boundary at half the height of the
 //      face area's widest point (max |x|), nose/lips boundary two thirds of the way from the tip down to the
@@ -63,8 +64,19 @@ struct ImportantAreas {
   // Per area, why it is absent or how it was found when not by the steps above (empty otherwise): an ear side
   // without an ear-like flap (hair, not scanned), the eyes' fallback band on a mesh whose morphology removed them.
   std::array<std::string, kAreaCount> note{};
-  std::array<double, 2> ear_flap_span_rho{};  // right, left: the largest thin-sheet piece's span (0: none)
+  std::array<double, 2> ear_flap_span_rho{};  // right, left: the ear's flap span, or the largest piece's (0: none)
+  // Right, left: the ear's flap centroid, head frame in rho (zero when the side has no ear).
+  std::array<Eigen::Vector3d, 2> ear_centre_rho{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
 };
+
+// Whether a flap centred at `centre_rho` (head frame, in rho) can be an ear: "" if so, else why not. An ear's centre
+// lies beside the head at about the nose's height and in front of the back of the head: at most 7.5 rho behind the
+// nose tip and 0.5 rho above it (head_frame.h's y follows the tip's normal, which tilts up on the source heads, so
+// ears sit 0.9 .. 3.4 rho below the tip in this frame). Chosen on the four source heads, whose found ears lie at y
+// -6.7 .. -3.6 and z -3.4 .. -0.9 rho; the fins a TSDF fuses behind and above a head's silhouette (y -8 .. -9.3,
+// z up to +1.9) and Nefertiti's crown (y -10.5, z +0.9) fail it (bench/results/head.md). The sides (|x| >= 2 rho,
+// beyond the outer eye corners at 1.5 .. 2.5 rho) and y < -1.5 rho are step 3's search region already.
+std::string ear_implausible(const Eigen::Vector3d& centre_rho);
 
 int paper_k_for_vertex_count(int n);
 

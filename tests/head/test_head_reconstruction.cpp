@@ -13,12 +13,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <tuple>
 #include <cmath>
 #include <numbers>
 #include <Eigen/Geometry>
@@ -42,6 +44,10 @@ struct Outcome {
   size_t fused_vertices = 0;
   int source_points = 0, fused_points = 0;
   std::vector<std::string> fused_warnings;
+  // Per side (right, left): whether each mesh has an ear, and the distance between the two ears' flap centres
+  // (important_areas.h's ear_centre_rho) in the source's rho (NaN unless both have one).
+  std::array<bool, 2> source_ear{}, fused_ear{};
+  std::array<double, 2> ear_offset_rho{std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
   double median_vox() const {
     std::vector<double> d;
     for (const auto& [name, v] : distance_vox) d.push_back(v);
@@ -187,9 +193,30 @@ Outcome reconstruct(const TriangleMesh& source, const Config& config) {
   for (const ControlPoint& c : on_fused.control_points)
     if (auto it = expected.find(c.name); it != expected.end())
       out.distance_vox[c.name] = (c.position.cast<double>() - it->second).norm() / voxel_m;
+  // The flap centres in metres: head frame (rho) -> input units -> world.
+  for (int side = 0; side < 2; ++side) {
+    const int a = static_cast<int>(side == 0 ? Area::ear_right : Area::ear_left);
+    out.source_ear[side] = on_source.areas.counts[a] > 0;
+    out.fused_ear[side] = on_fused.areas.counts[a] > 0;
+    if (!out.source_ear[side] || !out.fused_ear[side]) continue;
+    const HeadFrame& fs = on_source.frame;
+    const HeadFrame& ff = on_fused.frame;
+    const Eigen::Vector3d cs = to_world((fs.origin_input + fs.R_head_input.transpose() * (on_source.areas.ear_centre_rho[side] * fs.cap_scale)).cast<float>());
+    const Eigen::Vector3d cf = ff.origin_input + ff.R_head_input.transpose() * (on_fused.areas.ear_centre_rho[side] * ff.cap_scale);
+    out.ear_offset_rho[side] = (cf - cs).norm() / (scale * fs.cap_scale);
+  }
   out.nose_tip_vox = (fused.vertices[on_fused.frame.nose_tip_vertex].cast<double>() -
                       to_world(source.vertices[on_source.frame.nose_tip_vertex])).norm() / voxel_m;
   return out;
+}
+
+void expect_ears_absent_or_right(const Outcome& o) {
+  for (int side = 0; side < 2; ++side) {
+    EXPECT_TRUE(o.source_ear[side]) << "libigl's source head has both ears (test_head_real)";
+    if (o.fused_ear[side]) {
+      EXPECT_LE(o.ear_offset_rho[side], 1.5) << (side == 0 ? "right" : "left") << " ear";
+    }
+  }
 }
 
 void print(const char* what, const Config& c, const Outcome& o) {
@@ -204,6 +231,9 @@ void print(const char* what, const Config& c, const Outcome& o) {
     std::sort(d.begin(), d.end());
     std::printf("  %-10s %2zu points: median %.2f, max %.2f vox\n", g.c_str(), d.size(), d[d.size() / 2], d.back());
   }
+  for (int side = 0; side < 2; ++side)
+    std::printf("  %s ear: source %s, fused %s, flap centres %.2f rho apart\n", side == 0 ? "right" : "left",
+                o.source_ear[side] ? "found" : "absent", o.fused_ear[side] ? "found" : "absent", o.ear_offset_rho[side]);
   for (const std::string& w : o.fused_warnings) std::printf("  fused mesh: %s\n", w.c_str());
   for (const auto& [name, d] : o.distance_vox) std::printf("    %-24s %6.2f vox\n", name.c_str(), d);
 }
@@ -233,12 +263,13 @@ TEST(HeadReconstruction, FusedControlPointsMatchTheSource) {
   config.physical = true;
   const Outcome o = reconstruct(source, config);
   print("test", config, o);
-  // Measured: frame cosines 1.00, nose tip 0.59 voxel, 47 of 52 points matched (the fused right ear is reported
-  // absent; a left flap is found, but on a fin behind and above the head: its 5 points lie ~24 voxels off),
-  // median 1.69 voxels, 62 % within 2; per area eyes 1.09 / 0.96, nose 1.66 (8 points), lips 2.22, ear_left 23.8.
+  // Measured: frame cosines 1.00, nose tip 0.59 voxel, 42 of 52 points matched (both fused ears reported absent:
+  // the right has no flap of an ear's span, the left's one flap is a fin 8 rho behind and 1.8 rho above the tip,
+  // rejected by important_areas.h's ear_implausible; before that test its 5 points lay ~24 voxels off), median
+  // 1.59 voxels, 69 % within 2; per area eyes 1.09 / 0.96, nose 1.66 (8 points), lips 2.22.
   // Over 10 noise seeds the median spans 1.49 .. 2.43 voxels (8 of 10 within 2; bench/results/head.md).
   // Bounds: the 2 voxels on the median, the tip, the eyes and the nose; the lips at 3 voxels (one voxel
-  // above what they reach). The ears are reported, not bounded.
+  // above what they reach); the ears either absent or on the source's ear (expect_ears_absent_or_right).
   const double target = 2.0;
   EXPECT_GE(o.axis_cos.minCoeff(), 0.95);
   EXPECT_LE(o.nose_tip_vox, target);
@@ -251,6 +282,29 @@ TEST(HeadReconstruction, FusedControlPointsMatchTheSource) {
   }
   ASSERT_TRUE(g.count("lips"));
   EXPECT_LE(g.at("lips"), target + 1.0);
+  expect_ears_absent_or_right(o);
+}
+
+// A fused ear, when one is reported, lies on the source's: its flap's centre within 1.5 rho of the source ear's
+// flap centre (rho ~19 mm here). An ear is ~6 cm = 3 rho tall, so a centre within half of that lies on the ear;
+// the fins the flap test found before ear_implausible (seed 0 at 2 / 2.5 / 3 mm, seed 18) lie 3.05 .. 3.26 rho from
+// it (head-frame centroids, bench/results/head.md), the fused ears it now keeps 0.54 and 1.04 (2 mm).
+TEST(HeadReconstruction, FusedEarsAreAbsentOrOnTheSourceEar) {
+  if (!std::filesystem::exists(kMesh)) GTEST_SKIP() << kMesh << " is absent (../shared not mounted)";
+  const TriangleMesh source = read_mesh_file(kMesh);
+  // 2 mm: both ears found, formerly on fins 32 / 38 voxels off; 2.5 mm and seed 18: one fin each, now rejected.
+  for (const auto& [voxel_m, seed, ears] : {std::tuple{0.002, 0, 2}, std::tuple{0.0025, 0, 0}, std::tuple{0.003, 18, 0}}) {
+    Config config;
+    config.voxel_m = voxel_m;
+    config.seed = seed;
+    config.second_elevation_deg = -30.0;
+    config.second_sweep_deg = 120.0;
+    config.physical = true;
+    const Outcome o = reconstruct(source, config);
+    print("ears", config, o);
+    expect_ears_absent_or_right(o);
+    EXPECT_EQ(int(o.fused_ear[0]) + int(o.fused_ear[1]), ears) << voxel_m << " m, seed " << seed;
+  }
 }
 
 // The capture and scales before: one ring 10 degrees above, the paper's scales (1-ring evaluations, MLS h the
