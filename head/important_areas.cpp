@@ -102,18 +102,19 @@ constexpr double kEarMaxBehindRho = 7.5;
 constexpr double kEarMaxAboveRho = 0.5;
 
 std::string ear_implausible(const Eigen::Vector3d& c) {
-  char buf[200];
+  std::string why;
+  char buf[160];
   if (c.y() < -kEarMaxBehindRho) {
     std::snprintf(buf, sizeof buf, "%.1f rho behind the nose tip, an ear's centre lies at most %.1f (behind it is the back of the head)",
                   -c.y(), kEarMaxBehindRho);
-    return buf;
+    why = buf;
   }
   if (c.z() > kEarMaxAboveRho) {
     std::snprintf(buf, sizeof buf, "%.1f rho above the nose tip, an ear's centre lies at most %.1f (above it is the cranium)",
                   c.z(), kEarMaxAboveRho);
-    return buf;
+    why += (why.empty() ? "" : "; ") + std::string(buf);
   }
-  return "";
+  return why;
 }
 
 namespace {
@@ -177,7 +178,7 @@ void find_ears(const std::vector<Eigen::Vector3d>& ph, const std::vector<Eigen::
       const std::string why = ear_implausible(c / rho);
       if (!why.empty()) {
         if (rejected.empty()) {
-          char buf[200];
+          char buf[480];
           std::snprintf(buf, sizeof buf, "an ear-like flap spanning %.2f rho centred at x %+.2f y %+.2f z %+.2f rho was rejected: %s",
                         s / rho, c.x() / rho, c.y() / rho, c.z() / rho, why.c_str());
           rejected = buf;
@@ -192,7 +193,7 @@ void find_ears(const std::vector<Eigen::Vector3d>& ph, const std::vector<Eigen::
     span_rho[side] = (best ? span : largest_span) / rho;
     ear_centre_rho[side] = best ? Eigen::Vector3d(centroid / rho) : Eigen::Vector3d::Zero();
     if (!best) {
-      char buf[512];
+      char buf[640];
       if (!rejected.empty())
         std::snprintf(buf, sizeof buf, "no plausible ear on the %s side of the head (%s); its control points are absent",
                       side == 0 ? "right" : "left", rejected.c_str());
