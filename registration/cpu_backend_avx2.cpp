@@ -197,7 +197,17 @@ HF_AVX2_INLINE bool icp_rows(const ResidualProblem& p, const hf_icp_params& prm,
   const Lanes3 n{nr.x, nr.y, nr.z};
   valid = and_(valid, cmp_ge(dot3(rn, n), splat(prm.min_normal_cos)));
   const __m256 r = dot3(d, n);
-  const __m256 weight = mul(splat(prm.weight), robust_weight(prm.robust, r));
+  __m256 weight;
+  if (prm.depth_noise_ref_m > 0.0f) {
+    // hf_icp_depth_scale, s = min(1, ref / z)^2, and the scalar kernel's order of products (bit for bit). z > 0 on
+    // every valid lane; the others' rows are masked.
+    const __m256 q = _mm256_min_ps(_mm256_div_ps(splat(prm.depth_noise_ref_m), _mm256_max_ps(vc.z, splat(1e-30f))),
+                                   splat(1.0f));
+    const __m256 s = mul(q, q);
+    weight = mul(mul(mul(splat(prm.weight), s), s), robust_weight(prm.robust, mul(s, r)));
+  } else {
+    weight = mul(splat(prm.weight), robust_weight(prm.robust, r));
+  }
   const __m256 minus = splat(-1.0f);
   set_rows(v, Lanes3{mul(n.x, minus), mul(n.y, minus), mul(n.z, minus)}, r, weight, valid, rows);
   return !none(valid);

@@ -44,6 +44,7 @@ void IcpOptions::visit(OptionVisitor& v) {
   v("huber_icp_m", huber_icp_m);
   v("t_sigma_icp_m", t_sigma_icp_m);
   v("t_dof_icp", t_dof_icp);
+  v("depth_noise_ref_m", depth_noise_ref_m);
 }
 
 void IcpOptions::validate() const {
@@ -53,6 +54,8 @@ void IcpOptions::validate() const {
   require_option(finite_positive(huber_icp_m), "huber_icp_m must be finite and > 0");
   require_option(finite_positive(t_sigma_icp_m), "t_sigma_icp_m must be finite and > 0");
   require_option(finite_positive(t_dof_icp), "t_dof_icp must be finite and > 0");
+  require_option(std::isfinite(depth_noise_ref_m) && depth_noise_ref_m >= 0.0f,
+                 "depth_noise_ref_m must be finite and >= 0");
 }
 
 hf_icp_params IcpOptions::kernel_params(float weight) const {
@@ -61,6 +64,7 @@ hf_icp_params IcpOptions::kernel_params(float weight) const {
   p.min_normal_cos = float(std::cos(double(max_normal_angle_deg) * std::numbers::pi / 180.0));
   p.weight = weight;
   p.robust = robust_params(robust_icp, huber_icp_m, t_sigma_icp_m, t_dof_icp);
+  p.depth_noise_ref_m = depth_noise_ref_m;
   return p;
 }
 

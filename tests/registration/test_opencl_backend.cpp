@@ -174,9 +174,10 @@ const FramePair& room_pair() {
 // A registered method's level problem on the room pair at T, with every robust kernel set to `robust`. The
 // problem points into `method`, which the caller keeps.
 ResidualProblem make_problem(const FramePair& pair, int level, const std::string& name, RobustKernel robust,
-                             const SE3& T, test::MethodUnderTest& method) {
+                             const SE3& T, test::MethodUnderTest& method, double depth_noise_ref_m = 0.0) {
   RegistrationOptions options = default_registration_options(name);
   test::set_robust_kernels(options, robust);
+  options.set("depth_noise_ref_m", depth_noise_ref_m);
   options.set("finest_level_photometric_step", 1);
   options.set("min_gradient", 0.0);
   method = test::method_under_test(name, options, make_backend("cpu"));
@@ -234,6 +235,32 @@ INSTANTIATE_TEST_SUITE_P(Registry, BackendsAgree,
                            for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
                            return name + "_" + test::robust_name(std::get<1>(info.param));
                          });
+
+// icp's depth-noise weighting (IcpOptions::depth_noise_ref_m; the room's depths straddle 1.5 m) in icp and in
+// combined's icp term: the same 1e-6 relative agreement.
+TEST(OpenClBackend, IcpDepthNoiseWeightingAgrees) {
+  HF_SKIP_WITHOUT_OPENCL();
+  const FramePair& pair = room_pair();
+  CpuReductionBackend cpu;
+  opencl::OpenClReductionBackend cl_backend;
+  for (const char* name : {"icp", "combined"}) {
+    for (int level = 0; level < 2; ++level) {
+      test::MethodUnderTest method, plain;
+      ResidualProblem p = make_problem(pair, level, name, RobustKernel::huber, pair.T_ref_cur_true, method, 1.5);
+      p.inputs_version = std::uint64_t(level + 1);
+      const NormalEquations a = cpu.reduce(p), b = cl_backend.reduce(p);
+      const NormalEquations unweighted =
+          cpu.reduce(make_problem(pair, level, name, RobustKernel::huber, pair.T_ref_cur_true, plain));
+      ASSERT_GT(a.count, 500) << name << " level " << level;
+      EXPECT_EQ(a.count, b.count) << name << " level " << level;
+      EXPECT_EQ(a.count, unweighted.count) << name << ": the weighting rejects no row";
+      EXPECT_LT(a.JtJ.trace(), unweighted.JtJ.trace()) << name << ": rows beyond 1.5 m count less";
+      EXPECT_LE(max_abs_diff(a.JtJ, b.JtJ), 1e-6 * a.JtJ.cwiseAbs().maxCoeff()) << name << " level " << level;
+      EXPECT_LE((a.Jtr - b.Jtr).cwiseAbs().maxCoeff(), 1e-6 * a.Jtr.cwiseAbs().maxCoeff()) << name;
+      EXPECT_NEAR(a.cost, b.cost, 1e-6 * a.cost) << name;
+    }
+  }
+}
 
 TEST(OpenClBackend, ReusesUploadedMapsWhileTheInputsVersionHolds) {
   HF_SKIP_WITHOUT_OPENCL();

@@ -166,8 +166,8 @@ INSTANTIATE_TEST_SUITE_P(Registry, CpuBackend, ::testing::ValuesIn(registration_
 // rows bit for bit, so against the pixel-by-pixel loop only the order of the double sums differs: agreement to
 // 1e-12 relative; a method without one runs its pixel loop on the vectorised backend too (the same rows, never
 // none). Covered for every registered method: widths that are and are not multiples of the eight lanes,
-// photometric grids 1-3, every robust kernel, and invalid pixels whose other fields are NaN (the lanes' masks must
-// keep them out, as the scalar kernel's early returns do).
+// photometric grids 1-3, every robust kernel, icp's depth-noise weighting off and on, and invalid pixels whose other
+// fields are NaN (the lanes' masks must keep them out, as the scalar kernel's early returns do).
 TEST_P(CpuBackend, VectorisedPathGivesThePixelLoopsRows) {
   CpuReductionBackend simd(5, true), scalar(5, false);
   if (!simd.vectorised()) GTEST_SKIP() << "this processor has no AVX2: only the pixel loop runs here";
@@ -183,28 +183,31 @@ TEST_P(CpuBackend, VectorisedPathGivesThePixelLoopsRows) {
       for (int step : {1, 2, 3}) {
         for (RobustKernel robust : {RobustKernel::none, RobustKernel::huber, RobustKernel::student_t}) {
           for (int occlusion : {0, 1}) {
-            RegistrationOptions options = default_registration_options(name);
-            options.set("finest_level_photometric_step", step);
-            options.set("photometric_occlusion_check", occlusion);
-            test::set_robust_kernels(options, robust);
-            const MethodProblem mp(maps, name, options);
-            if (mp.method.dense == nullptr) GTEST_SKIP() << name << " is not a per-pixel method";
-            const ResidualProblem& p = mp.problem;
-            if (width == 64 && step == 1 && robust == RobustKernel::none && occlusion == 0) {
-              std::printf("%s: %s\n", name.c_str(),
-                          simd.vectorises(*p.kernel) ? "AVX2 path" : "no AVX2 path: the pixel loop runs");
+            for (double depth_noise_ref_m : {0.0, 2.0}) {  // 2 m: the maps' depths are 1.5-2.5 m, both sides
+              RegistrationOptions options = default_registration_options(name);
+              options.set("finest_level_photometric_step", step);
+              options.set("photometric_occlusion_check", occlusion);
+              if (!options.set("depth_noise_ref_m", depth_noise_ref_m) && depth_noise_ref_m > 0.0) continue;
+              test::set_robust_kernels(options, robust);
+              const MethodProblem mp(maps, name, options);
+              if (mp.method.dense == nullptr) GTEST_SKIP() << name << " is not a per-pixel method";
+              const ResidualProblem& p = mp.problem;
+              if (width == 64 && step == 1 && robust == RobustKernel::none && occlusion == 0) {
+                std::printf("%s: %s\n", name.c_str(),
+                            simd.vectorises(*p.kernel) ? "AVX2 path" : "no AVX2 path: the pixel loop runs");
+              }
+              const NormalEquations a = simd.reduce(p), b = scalar.reduce(p);
+              SCOPED_TRACE(testing::Message() << width << "x" << height << " " << name << " step " << step
+                                              << " robust " << test::robust_name(robust) << " occlusion "
+                                              << occlusion << " depth_noise_ref_m " << depth_noise_ref_m);
+              ASSERT_GT(b.count, 2);
+              EXPECT_EQ(a.count, b.count);
+              ASSERT_TRUE(a.JtJ.allFinite() && a.Jtr.allFinite() && std::isfinite(a.cost));
+              const double scale = b.JtJ.cwiseAbs().maxCoeff();
+              EXPECT_LE((a.JtJ - b.JtJ).cwiseAbs().maxCoeff(), 1e-12 * scale);
+              EXPECT_LE((a.Jtr - b.Jtr).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, b.Jtr.cwiseAbs().maxCoeff()));
+              EXPECT_NEAR(a.cost, b.cost, 1e-12 * std::max(1.0, b.cost));
             }
-            const NormalEquations a = simd.reduce(p), b = scalar.reduce(p);
-            SCOPED_TRACE(testing::Message() << width << "x" << height << " " << name << " step " << step
-                                            << " robust " << test::robust_name(robust) << " occlusion "
-                                            << occlusion);
-            ASSERT_GT(b.count, 2);
-            EXPECT_EQ(a.count, b.count);
-            ASSERT_TRUE(a.JtJ.allFinite() && a.Jtr.allFinite() && std::isfinite(a.cost));
-            const double scale = b.JtJ.cwiseAbs().maxCoeff();
-            EXPECT_LE((a.JtJ - b.JtJ).cwiseAbs().maxCoeff(), 1e-12 * scale);
-            EXPECT_LE((a.Jtr - b.Jtr).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, b.Jtr.cwiseAbs().maxCoeff()));
-            EXPECT_NEAR(a.cost, b.cost, 1e-12 * std::max(1.0, b.cost));
           }
         }
       }
