@@ -6,6 +6,10 @@
 // Defaults: Huber weights on both terms, lambda = rgb_weight. With Student-t on the photometric term its scale is
 // re-estimated from that term's own rows each iteration, as photometric alone does (TUM fr1/rpy 0-149: 2.55 cm
 // against Huber's 1.87, so Huber stays the default).
+// The corridor (issue 16's last target, within 1.5x of photometric): icp's rows weighed by the depth noise
+// (IcpOptions::depth_noise_ref_m, off by default) take it from 14.3 to 5.7 mm; the rest of the gap is the
+// photometric term's Huber weights, whose Student-t alternative costs TUM fr1/rpy 150-269 60 %
+// (bench/results/registration.md, "combined: icp's rows weighed by the depth noise").
 #pragma once
 
 #include "registration/dense_method.h"

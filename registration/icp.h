@@ -25,9 +25,10 @@ struct IcpOptions : MethodOptionsBase<IcpOptions> {
   // default. Measured through the pipeline in combined (bench/results/registration.md, "combined: icp's rows
   // weighed by the depth noise"), chosen on the corridor (seed 1) and TUM fr1/rpy 0-149: 2.5 m takes the corridor
   // 14.3 -> 5.3 mm (its far walls' grazing, quantised points are where icp's biased weak-direction information comes
-  // from; photometric alone 1.7 mm) and TUM 0-149 1.87 -> 1.79 cm; reported: corridor seeds 2 / 3 13.9 -> 5.7 /
-  // 5.2 mm, TUM fr1/rpy 150-269 1.71 -> 1.84 cm, 7-Scenes 2.60 -> 2.62 cm, fr1/desk 0.245 cm (same). Off by
-  // default: not a win on every real sequence and short of issue 16's corridor target (2.5 mm).
+  // from; photometric alone 1.7 mm) and TUM 0-149 1.87 -> 1.79 cm; reported: corridor seeds 0 / 2 / 3 14.3 / 13.9
+  // / 13.9 -> 5.7 / 5.7 / 5.2 mm, TUM fr1/rpy 150-269 1.71 -> 1.84 cm, 7-Scenes 2.60 -> 2.62 cm, fr1/desk 0.245 cm
+  // (same), the other presets the same or better but unregistered (5.2 -> 6.2 mm). Off by default: worse on two
+  // real sequences and short of issue 16's corridor target (1.5x photometric, 2.5 mm).
   float depth_noise_ref_m = 0.0f;
 
   void visit(OptionVisitor& v) override;
