@@ -63,6 +63,21 @@ struct DeviceFramePyramid::Impl {
       p.level->device_copies.add(p.host, ctx->publish(p.host, p.bytes, p.buffer));
     published.clear();
   }
+  // Runs one build's commands, then publishes what it read back; on any failure nothing is published (the levels'
+  // images are not what the buffers hold) and an OpenCL error becomes hf::Error naming `stage` and the device.
+  template <class Commands>
+  void run_and_publish(const char* stage, Commands&& commands) {
+    try {
+      commands();
+      publish_all();
+    } catch (const Error&) {
+      published.clear();
+      throw;
+    } catch (...) {
+      published.clear();
+      rethrow_as_hf_error(std::string(stage) + " on " + ctx->info().platform_name + " / " + ctx->info().device_name);
+    }
+  }
   // Vertices and normals of a w x h level from its depth, read back into `level`.
   void geometry(const cl::Buffer& d, int w, int h, FramePyramidLevel& level) {
     const NormalParams np;
@@ -146,7 +161,7 @@ FramePyramid DeviceFramePyramid::build(const DepthImage& depth, const ColorImage
   const float max_diff_m = 3.0f * kDepthPyramidSigmaR_m;  // build_depth_pyramid's and pyr_down_depth's default
   FramePyramid pyramid;
   pyramid.levels.resize(size_t(options.levels));
-  try {
+  m.run_and_publish("frame pyramid", [&] {
     cl::CommandQueue& q = m.queue;
     int w = depth.width(), h = depth.height();
     cl::Buffer raw = m.buffer(depth.size() * sizeof(float), CL_MEM_READ_ONLY);
@@ -200,14 +215,7 @@ FramePyramid DeviceFramePyramid::build(const DepthImage& depth, const ColorImage
         m.read_back(gy, level.grad_y, level, true);
       }
     }
-    m.publish_all();
-  } catch (const Error&) {
-    m.published.clear();
-    throw;
-  } catch (...) {
-    m.published.clear();
-    rethrow_as_hf_error("frame pyramid on " + device_name());
-  }
+  });
   return pyramid;
 }
 
@@ -225,7 +233,7 @@ FramePyramid DeviceFramePyramid::build_model(const VertexMap& vertices, const No
   const float max_diff_m = 3.0f * kDepthPyramidSigmaR_m;  // build_depth_pyramid's default
   FramePyramid pyramid;
   pyramid.levels.resize(size_t(levels));
-  try {
+  m.run_and_publish("model pyramid", [&] {
     cl::CommandQueue& q = m.queue;
     int w = camera.width, h = camera.height;
     const size_t n = size_t(w) * size_t(h), bytes = n * sizeof(hf_float4);
@@ -256,14 +264,7 @@ FramePyramid DeviceFramePyramid::build_model(const VertexMap& vertices, const No
         m.geometry(d, w, h, level);
       }
     }
-    m.publish_all();
-  } catch (const Error&) {
-    m.published.clear();
-    throw;
-  } catch (...) {
-    m.published.clear();
-    rethrow_as_hf_error("model pyramid on " + device_name());
-  }
+  });
   return pyramid;
 }
 
