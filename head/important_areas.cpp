@@ -85,8 +85,8 @@ class Buckets {
 // at least kEarMinSpanRho rho (an ear is ~6 cm = 2.7 rho tall) and whose centre lies where an ear can
 // (ear_implausible: a TSDF fuses fins at a head's silhouette behind and above it, flaps as much as a pinna, and on
 // fused heads those were the largest pieces: 24-38 voxels from the source's ear); else the side has no ear
-// (covered by hair, not scanned, only a fin) and says so, naming the rejected flap. The ear area is the area mask and the flap within 1.5 rho of the flap's centroid,
-// connected to the flap.
+// (covered by hair, not scanned, only a fin) and says so, naming the rejected flap. The ear area is the area mask
+// and the flap within 1.5 rho of the flap's centroid, connected to the flap.
 // kEarMinSpanRho: chosen on the four source heads of ../shared/data/head_meshes (the ears' flaps span 1.78-2.79
 // rho, Igea's hair-covered sides hold no flap vertex at all); on heads fused at 2-4 mm voxels the TSDF thickens
 // the pinna and its flaps span 0.36-0.95 rho, so fused ears are reported absent (bench/results/head.md: at 0.4
