@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <deque>
 
 #include "core/error.h"
 #include "registration/cpu_backend_avx2.h"
@@ -134,9 +135,21 @@ class CombinedMethod final : public DenseMethod {
   const DenseKernel& kernel() const override { return kKernel; }
   void begin_level(int level, const FramePyramidLevel& current, const FramePyramidLevel& reference,
                    ResidualProblem& problem) override {
+    // A registration's first level follows the previous one's finest: its scale joins the sequence's.
+    if (previous_level_ == 0 && frame_scale_ > 0.0) record_scale(frame_scale_);
+    frame_scale_ = 0.0;
+    previous_level_ = level;
+    level_ = level;
+    const bool clean = options_.sequence_is_clean(scale_history_);
+    photometric_ = options_.photometric;
+    float rgb_weight = options_.rgb_weight;
+    if (clean) {
+      photometric_.t_dof = options_.clean_t_dof;
+      photometric_.t_sigma_rgb_min = options_.clean_t_sigma_rgb_min;
+      rgb_weight *= options_.clean_rgb_weight_gain;
+    }
     params_.icp = options_.icp.kernel_params();
-    params_.photometric =
-        options_.photometric.kernel_params(level, options_.rgb_weight, options_.photometric.t_sigma_rgb_init);
+    params_.photometric = photometric_.kernel_params(level, rgb_weight, photometric_.t_sigma_rgb_init);
     if (options_.photometric.brightness_gain) {
       params_.photometric.gain = estimate_brightness_gain(current, reference, problem.T_ref_cur,
                                                           options_.photometric.brightness_gain_max_ratio);
@@ -163,12 +176,14 @@ class CombinedMethod final : public DenseMethod {
   // DVO's scale of the photometric term, as photometric alone re-estimates it (photometric.cpp), from the term's
   // own rows: their cost is lambda sum w r^2, so sigma^2 = cost / (lambda n). Reduced apart from icp's rows, the
   // term's scale no longer mixes metres and intensities.
+  // The finest level's last estimate is the frame's scale (CombinedOptions::clean_scale_rgb).
   void end_iteration(const NormalEquations&) override {
-    const PhotometricOptions& po = options_.photometric;
-    if (po.robust_rgb != RobustKernel::student_t || photometric_rows_ <= 0 || !(options_.rgb_weight > 0.0f)) return;
-    const double sigma2 = photometric_cost_ / (double(options_.rgb_weight) * double(photometric_rows_));
-    if (std::isfinite(sigma2) && sigma2 >= 0.0)
-      params_.photometric.robust.scale = std::max(po.t_sigma_rgb_min, float(std::sqrt(sigma2)));
+    const float lambda = params_.photometric.weight;
+    if (photometric_.robust_rgb != RobustKernel::student_t || photometric_rows_ <= 0 || !(lambda > 0.0f)) return;
+    const double sigma2 = photometric_cost_ / (double(lambda) * double(photometric_rows_));
+    if (!std::isfinite(sigma2) || !(sigma2 >= 0.0)) return;
+    params_.photometric.robust.scale = std::max(photometric_.t_sigma_rgb_min, float(std::sqrt(sigma2)));
+    if (level_ == 0) frame_scale_ = std::sqrt(sigma2);
   }
   void probe_terms(const std::vector<NormalEquations>& terms, const Vector6d& unit_scale,
                    const TermProbe& reduce_at) override {
@@ -183,6 +198,17 @@ class CombinedMethod final : public DenseMethod {
   mutable double photometric_cost_ = 0.0;
   mutable long photometric_rows_ = 0;
   Matrix6d icp_keep_ = Matrix6d::Identity();
+  // The photometric regime (CombinedOptions::clean_scale_rgb): the options of the level begun last, the scales of
+  // the last registrations' finest levels (oldest first) and this registration's so far.
+  PhotometricOptions photometric_;
+  std::deque<double> scale_history_;
+  double frame_scale_ = 0.0;
+  int level_ = -1, previous_level_ = -1;
+
+  void record_scale(double scale) {
+    scale_history_.push_back(scale);
+    while (int(scale_history_.size()) > options_.scale_history) scale_history_.pop_front();
+  }
 };
 
 RegistrationOptions defaults() {
@@ -206,6 +232,22 @@ void CombinedOptions::visit(OptionVisitor& v) {
   v("icp_probe_step_m", icp_probe_step_m);
   v("icp_probe_min_ratio", icp_probe_min_ratio);
   v("icp_probe_photometric_ratio", icp_probe_photometric_ratio);
+  v("clean_scale_rgb", clean_scale_rgb);
+  v("scale_history", scale_history);
+  v("scale_history_min", scale_history_min);
+  v("clean_t_dof", clean_t_dof);
+  v("clean_t_sigma_rgb_min", clean_t_sigma_rgb_min);
+  v("clean_rgb_weight_gain", clean_rgb_weight_gain);
+}
+
+bool CombinedOptions::sequence_is_clean(const std::deque<double>& scales) const {
+  if (!(clean_scale_rgb > 0.0f) || photometric.robust_rgb != RobustKernel::student_t ||
+      int(scales.size()) < std::max(1, scale_history_min))
+    return false;
+  std::vector<double> s(scales.begin(), scales.end());
+  const auto mid = s.begin() + std::ptrdiff_t(s.size() / 2);
+  std::nth_element(s.begin(), mid, s.end());
+  return *mid < double(clean_scale_rgb);
 }
 
 void CombinedOptions::validate() const {
@@ -225,6 +267,14 @@ void CombinedOptions::validate() const {
   require_option(std::isfinite(icp_probe_photometric_ratio) && icp_probe_photometric_ratio >= 0.0 &&
                      icp_probe_photometric_ratio <= 1.0,
                  "icp_probe_photometric_ratio must be in [0, 1]");
+  require_option(std::isfinite(clean_scale_rgb) && clean_scale_rgb >= 0.0f, "clean_scale_rgb must be finite and >= 0");
+  require_option(scale_history >= 1 && scale_history <= 1000, "scale_history must be in [1, 1000]");
+  require_option(scale_history_min >= 1 && scale_history_min <= scale_history,
+                 "scale_history_min must be in [1, scale_history]");
+  require_option(finite_positive(clean_t_dof), "clean_t_dof must be finite and > 0");
+  require_option(finite_positive(clean_t_sigma_rgb_min), "clean_t_sigma_rgb_min must be finite and > 0");
+  require_option(std::isfinite(clean_rgb_weight_gain) && clean_rgb_weight_gain >= 0.0f,
+                 "clean_rgb_weight_gain must be finite and >= 0");
 }
 
 RegistrationMethod combined_registration_method() { return {"combined", defaults, make}; }

@@ -5,13 +5,17 @@
 // GaussNewtonRegistration::level_problem gives).
 // Defaults: Huber weights on icp's term, Student-t on the photometric term (nu 10, its sigma re-estimated from the
 // term's own rows each iteration and floored at 0.02), icp's rows weighed by the depth noise beyond 2.5 m
-// (IcpOptions::depth_noise_ref_m), lambda = rgb_weight. Chosen on the corridor preset (seed 1) and TUM fr1/rpy
-// 0-149 (bench/results/registration.md, "combined: icp's rows weighed by the depth noise" and "combined's new
-// defaults"): corridor 14.3 -> 5.4 mm, TUM 0-149 1.87 -> 1.85 cm; reported on fr1/desk 0.245 -> 0.224 cm,
-// 7-Scenes 2.60 -> 2.58 cm and every other preset (same or better but `unregistered`, which the colour check hands
-// to icp); TUM 150-269 1.71 -> 1.69 cm (seen while choosing). Issue 16's corridor target (within 1.5x of
-// photometric's 1.68 mm) is not reached: 3.2x.
+// (IcpOptions::depth_noise_ref_m), lambda = rgb_weight; in a sequence whose photometric scale is below 0.009 (its
+// images agree with the model to about two grey levels: clean_scale_rgb below) the photometric term at its own
+// scale instead (nu 3, floor 0.002, lambda x 5). Chosen on the corridor preset (seed 1) and TUM fr1/rpy 0-149
+// (bench/results/registration.md, "combined: icp's rows weighed by the depth noise", "combined's new defaults" and
+// "combined: two photometric regimes"): corridor 14.3 -> 5.4 -> 2.3 mm (photometric alone 1.7), TUM 0-149 1.87 ->
+// 1.85 cm; reported on fr1/desk 0.245 -> 0.224 cm, 7-Scenes 2.60 -> 2.58 cm, TUM 150-269 1.71 -> 1.69 cm (seen
+// while choosing the first two) and every other preset (the regimes: room, wall and textureless seen; wall 0.41 ->
+// 2.33 mm against icp's 2.27, the price of the corridor).
 #pragma once
+
+#include <deque>
 
 #include "registration/dense_method.h"
 #include "registration/icp.h"
@@ -57,6 +61,27 @@ struct CombinedOptions : MethodOptionsBase<CombinedOptions> {
   // sequence 1.98 -> 0.73 mm (icp 1.00 mm), TUM fr1/rpy 0-149 1.870 -> 1.872 cm with max_ratio 0.1, where without
   // the max_ratio test (every estimated gain used) TUM gets 2.11 cm. Chosen there, reported on the rest:
   // bench/results/registration.md ("combined: observed information, brightness gain").
+  // Two photometric regimes, told apart by the sequence's own photometric scale: the median, over the last
+  // scale_history registrations (at least scale_history_min of them; fewer: the default regime), of the Student-t
+  // scale the finest level ends with. Below clean_scale_rgb (intensity in [0, 1]: 2.3 grey levels) the images agree
+  // with the model almost exactly (little sensor noise, no blur, no rolling shutter), so the few large residuals
+  // are outliers (the corridor's far, barely fused walls) and the photometric term is trusted at its own scale:
+  // nu clean_t_dof, floor clean_t_sigma_rgb_min, rgb_weight times clean_rgb_weight_gain. Otherwise the options
+  // above, where large residuals carry motion blur and rolling shutter and a floor of 0.02 keeps them. Measured
+  // scales (finest level, 640x480 tracked at 320x240): the real sequences' running medians 0.0095 (7-Scenes' first
+  // five frames) to 0.07, never below 0.0131 after their first ten frames; the synthetic presets' 0.005-0.0079.
+  // 0: one regime. Chosen on the corridor (seed 1) with room, wall and textureless seen (bench/results/
+  // registration.md, "combined: two photometric regimes"): corridor 5.0 -> 2.3 mm; the real sequences stay in the
+  // default regime throughout (identical trajectories).
+  float clean_scale_rgb = 0.009f;
+  int scale_history = 15;
+  int scale_history_min = 5;
+  float clean_t_dof = 3.0f;
+  float clean_t_sigma_rgb_min = 0.002f;
+  float clean_rgb_weight_gain = 5.0f;
+  // Whether `scales` (the finest levels' Student-t scales, oldest first) make the sequence clean, as above.
+  bool sequence_is_clean(const std::deque<double>& scales) const;
+
   CombinedOptions() {
     photometric.robust_rgb = RobustKernel::student_t;
     photometric.t_dof = 10.0f;
