@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <deque>
 
 #include "core/error.h"
 #include "reg_test_util.h"
@@ -289,6 +290,31 @@ TEST(Combined, TermThresholdsAreValidated) {
   RegistrationOptions g = default_registration_options("combined");
   EXPECT_TRUE(g.set("brightness_gain_max_ratio", 1.5));
   EXPECT_THROW(g.validate(), Error);
+}
+
+// The regime test (CombinedOptions::sequence_is_clean): the median of the recorded scales against
+// clean_scale_rgb, only with scale_history_min of them, only for Student-t photometric weights, never at 0.
+TEST(Combined, SequenceIsCleanByTheMedianScale) {
+  CombinedOptions o;  // clean_scale_rgb 0.009, scale_history_min 5, Student-t
+  const std::deque<double> clean{0.006, 0.007, 0.02, 0.005, 0.008};  // median 0.007 despite one large scale
+  const std::deque<double> real{0.006, 0.012, 0.02, 0.015, 0.008};    // median 0.012
+  EXPECT_TRUE(o.sequence_is_clean(clean));
+  EXPECT_FALSE(o.sequence_is_clean(real));
+  EXPECT_FALSE(o.sequence_is_clean(std::deque<double>(clean.begin(), clean.begin() + 4)));  // too few yet
+  const std::deque<double> even{0.005, 0.006, 0.0095, 0.0095, 0.0095, 0.02};  // upper median 0.0095
+  EXPECT_FALSE(o.sequence_is_clean(even));
+  CombinedOptions off = o;
+  off.clean_scale_rgb = 0.0f;
+  EXPECT_FALSE(off.sequence_is_clean(clean));
+  CombinedOptions huber = o;
+  huber.photometric.robust_rgb = RobustKernel::huber;
+  EXPECT_FALSE(huber.sequence_is_clean(clean));
+  CombinedOptions bad = o;
+  bad.scale_history_min = bad.scale_history + 1;
+  EXPECT_THROW(bad.validate(), Error);
+  bad = o;
+  bad.clean_t_sigma_rgb_min = 0.0f;
+  EXPECT_THROW(bad.validate(), Error);
 }
 
 }  // namespace
