@@ -136,14 +136,12 @@ class CombinedMethod final : public DenseMethod {
   void begin_level(int level, const FramePyramidLevel& current, const FramePyramidLevel& reference,
                    ResidualProblem& problem) override {
     // A registration's first level follows the previous one's finest: its scale joins the sequence's.
-    if (previous_level_ == 0 && frame_scale_ > 0.0) record_scale(frame_scale_);
+    if (level_ == 0 && frame_scale_ > 0.0) record_scale(frame_scale_);
     frame_scale_ = 0.0;
-    previous_level_ = level;
     level_ = level;
-    const bool clean = options_.sequence_is_clean(scale_history_);
     photometric_ = options_.photometric;
     float rgb_weight = options_.rgb_weight;
-    if (clean) {
+    if (clean_) {
       photometric_.t_dof = options_.clean_t_dof;
       photometric_.t_sigma_rgb_min = options_.clean_t_sigma_rgb_min;
       rgb_weight *= options_.clean_rgb_weight_gain;
@@ -198,16 +196,19 @@ class CombinedMethod final : public DenseMethod {
   mutable double photometric_cost_ = 0.0;
   mutable long photometric_rows_ = 0;
   Matrix6d icp_keep_ = Matrix6d::Identity();
-  // The photometric regime (CombinedOptions::clean_scale_rgb): the options of the level begun last, the scales of
-  // the last registrations' finest levels (oldest first) and this registration's so far.
+  // The photometric regime (CombinedOptions::clean_scale_rgb): the options of the level begun last (level_), the
+  // scales of the last registrations' finest levels (oldest first), the regime they make (decided once per
+  // registration, when its first level records the previous one's scale) and this registration's scale so far.
   PhotometricOptions photometric_;
   std::deque<double> scale_history_;
+  bool clean_ = false;
   double frame_scale_ = 0.0;
-  int level_ = -1, previous_level_ = -1;
+  int level_ = -1;
 
   void record_scale(double scale) {
     scale_history_.push_back(scale);
     while (int(scale_history_.size()) > options_.scale_history) scale_history_.pop_front();
+    clean_ = options_.sequence_is_clean(scale_history_);
   }
 };
 
