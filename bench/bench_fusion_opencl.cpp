@@ -36,7 +36,7 @@
 #include "fusion/opencl/device_voxel_grid.h"
 #include "registration/frame_pyramid.h"
 #include "registration/opencl/device_pyramid.h"
-#include "registration/opencl/opencl_context.h"
+#include "core/opencl/opencl_context.h"
 #include "slam/pipeline.h"
 
 namespace hf::opencl {

@@ -137,6 +137,8 @@ if(HF_BUILD_TESTS AND NOT HF_SANITIZE)
     list(APPEND hf_header_tus ${tu})
   endforeach()
   add_library(hf_header_check OBJECT ${hf_header_tus})
+  # One header per translation unit is the point of this check: never batched.
+  set_target_properties(hf_header_check PROPERTIES UNITY_BUILD OFF)
   target_link_libraries(hf_header_check PRIVATE ${hf_exported} hf_warnings)
   # Counted with the tests (a no-op once `all` is built; names the header that fails otherwise).
   add_test(NAME public_headers COMMAND ${CMAKE_COMMAND} --build ${PROJECT_BINARY_DIR} --target hf_header_check)

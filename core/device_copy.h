@@ -1,6 +1,6 @@
 // Device copies of host images: on --backend opencl the frame pyramid and the model maps stay on the device between
 // stages (issue 20), and the host images are their read-back mirrors. The stage that made an image on a device
-// publishes the device buffer as that image's copy (registration/opencl/opencl_context.h, Context::publish) and
+// publishes the device buffer as that image's copy (core/opencl/opencl_context.h, Context::publish) and
 // gets a token; the holder of the image keeps the token beside it (FramePyramidLevel::device_copies,
 // fusion::RaycastResult::device_copies). While the token lives, a later stage on the same device binds the copy
 // instead of uploading the host pixels (the reduction backend, the model pyramid).

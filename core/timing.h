@@ -13,6 +13,11 @@
 
 namespace hf {
 
+// Wall-clock milliseconds since t0 on the steady clock (for stage timings: monotonic, never negative).
+inline double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
 class StageTimes {
  public:
   void add(const std::string& stage, double ms);

@@ -8,14 +8,11 @@
 #include <vector>
 
 #include "fusion/gc.h"
+#include "core/timing.h"
 
 namespace hf::fusion {
 
 namespace {
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 }  // namespace
 

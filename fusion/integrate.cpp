@@ -15,6 +15,7 @@
 #include "core/simd_avx2.h"
 #include "fusion/integrate_cpu.h"
 #include "fusion/kernels/integrate_kernels.h"
+#include "core/timing.h"
 
 namespace hf::fusion {
 
@@ -31,10 +32,6 @@ std::uint64_t pack(int x, int y, int z) {
 BlockCoord unpack(std::uint64_t k) {
   const std::uint64_t m = (1u << 21) - 1;
   return {int((k >> 42) & m) - kCoordBias, int((k >> 21) & m) - kCoordBias, int(k & m) - kCoordBias};
-}
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 // Per-thread list of touched blocks with a direct-mapped cache: neighbouring pixels mostly cross the same blocks

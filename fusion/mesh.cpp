@@ -223,12 +223,6 @@ TriangleMesh mesh_blocks(const std::vector<std::pair<BlockCoord, const VoxelBloc
   return mesh;
 }
 
-bool coord_less(const BlockCoord& a, const BlockCoord& b) {
-  if (a.z != b.z) return a.z < b.z;
-  if (a.y != b.y) return a.y < b.y;
-  return a.x < b.x;
-}
-
 }  // namespace
 
 TriangleMesh extract_mesh(const VoxelBlockGrid& grid, const MeshOptions& options, MeshStats* stats) {
@@ -242,7 +236,7 @@ TriangleMesh extract_mesh(const VoxelBlockGrid& grid, const BlockStore& store, c
   for_each_block_including_streamed(grid, store, [&](const BlockCoord& c, const VoxelBlock& b) {
     blocks.emplace_back(c, &b);
   });
-  std::stable_sort(blocks.begin(), blocks.end(), [](const auto& a, const auto& b) { return coord_less(a.first, b.first); });
+  std::stable_sort(blocks.begin(), blocks.end(), [](const auto& a, const auto& b) { return block_coord_less(a.first, b.first); });
   return mesh_blocks(blocks, grid.params().voxel_m, options, stats);
 }
 

@@ -11,13 +11,10 @@
 #include "core/mesh_interpolation.h"
 #include "core/parallel.h"
 #include "fusion/raycast_sampled.h"
+#include "core/timing.h"
 
 namespace hf::fusion {
 namespace {
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 Rgb8 to_rgb8(const float* v) {
   auto c = [](float x) { return std::uint8_t(x <= 0.0f ? 0 : (x >= 255.0f ? 255 : int(x + 0.5f))); };

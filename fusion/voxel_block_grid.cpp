@@ -22,12 +22,6 @@ constexpr size_t kMaxCapacityBlocks = size_t(1) << 26;
 
 int floor_div8(int v) { return v >= 0 ? v / HF_BLOCK_SIZE : -((-v + HF_BLOCK_SIZE - 1) / HF_BLOCK_SIZE); }
 
-bool coord_less(const BlockCoord& a, const BlockCoord& b) {
-  if (a.z != b.z) return a.z < b.z;
-  if (a.y != b.y) return a.y < b.y;
-  return a.x < b.x;
-}
-
 }  // namespace
 
 void VolumeParams::validate() const {
@@ -194,7 +188,7 @@ std::vector<BlockCoord> VoxelBlockGrid::block_coords() const {
     coords.reserve(block_count());
     impl_->for_each_slot([&](std::uint32_t s) { coords.push_back(impl_->slot_coord(s)); });
   }
-  std::sort(coords.begin(), coords.end(), coord_less);
+  std::sort(coords.begin(), coords.end(), block_coord_less);
   return coords;
 }
 
@@ -205,7 +199,7 @@ std::vector<std::pair<BlockCoord, VoxelBlock*>> VoxelBlockGrid::blocks() {
     out.reserve(block_count());
     impl_->for_each_slot([&](std::uint32_t s) { out.emplace_back(impl_->slot_coord(s), impl_->slot_block(s)); });
   }
-  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return coord_less(a.first, b.first); });
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return block_coord_less(a.first, b.first); });
   return out;
 }
 

@@ -48,6 +48,13 @@ struct BlockCoord {
   bool operator==(const BlockCoord&) const = default;
 };
 
+// Block order by z, then y, then x: the order saved maps and meshes list blocks in (deterministic output).
+inline bool block_coord_less(const BlockCoord& a, const BlockCoord& b) {
+  if (a.z != b.z) return a.z < b.z;
+  if (a.y != b.y) return a.y < b.y;
+  return a.x < b.x;
+}
+
 struct BlockCoordHash {
   // Niessner's hash: (x * 73856093) ^ (y * 19349669) ^ (z * 83492791), on unsigned to avoid overflow UB.
   size_t operator()(const BlockCoord& c) const {

@@ -6,12 +6,6 @@
 #include "io/libcamera_capture.h"
 
 namespace hf {
-namespace {
-constexpr std::uint32_t fourcc(char a, char b, char c, char d) {
-  return std::uint32_t(std::uint8_t(a)) | (std::uint32_t(std::uint8_t(b)) << 8) |
-         (std::uint32_t(std::uint8_t(c)) << 16) | (std::uint32_t(std::uint8_t(d)) << 24);
-}
-}  // namespace
 
 std::optional<PixelFormat> pixel_format_from_libcamera(std::uint32_t code) {
   if (code == fourcc('Y', 'U', 'Y', 'V')) return PixelFormat::yuyv;

@@ -9,11 +9,6 @@
 namespace hf {
 namespace {
 
-constexpr std::uint32_t fourcc(char a, char b, char c, char d) {
-  return std::uint32_t(std::uint8_t(a)) | (std::uint32_t(std::uint8_t(b)) << 8) |
-         (std::uint32_t(std::uint8_t(c)) << 16) | (std::uint32_t(std::uint8_t(d)) << 24);
-}
-
 size_t packed_row_bytes(PixelFormat f, int width) {
   switch (f) {
     case PixelFormat::yuyv:

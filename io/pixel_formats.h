@@ -24,6 +24,13 @@
 
 namespace hf {
 
+// The V4L2 / DRM four-character code of a pixel format ('Y','U','Y','V' -> V4L2_PIX_FMT_YUYV): a, b, c, d from the
+// least significant byte up.
+constexpr std::uint32_t fourcc(char a, char b, char c, char d) {
+  return std::uint32_t(std::uint8_t(a)) | (std::uint32_t(std::uint8_t(b)) << 8) |
+         (std::uint32_t(std::uint8_t(c)) << 16) | (std::uint32_t(std::uint8_t(d)) << 24);
+}
+
 enum class PixelFormat { yuyv, uyvy, rgb24, bgr24, xbgr32, xrgb32, nv12, mjpeg, z16 };
 
 std::string to_string(PixelFormat format);

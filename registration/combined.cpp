@@ -13,12 +13,12 @@
 namespace hf {
 namespace {
 
-constexpr unsigned kInputs = HF_REG_IN_BIT(HF_REG_IN_CUR_VERTICES) | HF_REG_IN_BIT(HF_REG_IN_CUR_NORMALS) |
+constexpr unsigned kCombinedInputs = HF_REG_IN_BIT(HF_REG_IN_CUR_VERTICES) | HF_REG_IN_BIT(HF_REG_IN_CUR_NORMALS) |
                              HF_REG_IN_BIT(HF_REG_IN_CUR_INTENSITY) | HF_REG_IN_BIT(HF_REG_IN_REF_VERTICES) |
                              HF_REG_IN_BIT(HF_REG_IN_REF_NORMALS) | HF_REG_IN_BIT(HF_REG_IN_REF_INTENSITY) |
                              HF_REG_IN_BIT(HF_REG_IN_REF_GRAD_X) | HF_REG_IN_BIT(HF_REG_IN_REF_GRAD_Y);
-const DenseKernel kKernel = make_dense_kernel<hf_combined_params, hf_combined_pixel>(
-    "combined", kInputs, 2, &detail::combined_rows_avx2);
+const DenseKernel kCombinedKernel = make_dense_kernel<hf_combined_params, hf_combined_pixel>(
+    "combined", kCombinedInputs, 2, &detail::combined_rows_avx2);
 
 // One term in the balanced units S (rotations as displacements at the RMS point distance, as the driver's
 // degeneracy test): Hs = S H S, gs = S g, the projector P onto its eigen-directions with eigenvalue above
@@ -132,7 +132,7 @@ namespace {
 class CombinedMethod final : public DenseMethod {
  public:
   explicit CombinedMethod(const CombinedOptions& options) : options_(options) {}
-  const DenseKernel& kernel() const override { return kKernel; }
+  const DenseKernel& kernel() const override { return kCombinedKernel; }
   void begin_level(int level, const FramePyramidLevel& current, const FramePyramidLevel& reference,
                    ResidualProblem& problem) override {
     // A registration's first level follows the previous one's finest: its scale joins the sequence's.
@@ -212,11 +212,11 @@ class CombinedMethod final : public DenseMethod {
   }
 };
 
-RegistrationOptions defaults() {
+RegistrationOptions combined_defaults() {
   return RegistrationOptions(GaussNewtonOptions{}, std::make_unique<CombinedOptions>());
 }
 
-std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend> backend) {
+std::unique_ptr<Registration> make_combined(const RegistrationOptions& options, std::unique_ptr<ReductionBackend> backend) {
   return std::make_unique<GaussNewtonRegistration>(
       "combined", std::make_unique<CombinedMethod>(options.method_as<CombinedOptions>()), options, std::move(backend));
 }
@@ -278,6 +278,6 @@ void CombinedOptions::validate() const {
                  "clean_rgb_weight_gain must be finite and >= 0");
 }
 
-RegistrationMethod combined_registration_method() { return {"combined", defaults, make}; }
+RegistrationMethod combined_registration_method() { return {"combined", combined_defaults, make_combined}; }
 
 }  // namespace hf

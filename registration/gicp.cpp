@@ -11,12 +11,12 @@
 namespace hf {
 namespace {
 
-constexpr unsigned kInputs =
+constexpr unsigned kGicpInputs =
     HF_REG_IN_BIT(HF_REG_IN_CUR_VERTICES) | HF_REG_IN_BIT(HF_REG_IN_CUR_NORMALS) | HF_REG_IN_BIT(HF_REG_IN_REF_VERTICES) |
     HF_REG_IN_BIT(HF_REG_IN_REF_NORMALS) | HF_REG_IN_BIT(HF_REG_IN_GICP_CUR_COV_A) |
     HF_REG_IN_BIT(HF_REG_IN_GICP_CUR_COV_B) | HF_REG_IN_BIT(HF_REG_IN_GICP_REF_COV_A) |
     HF_REG_IN_BIT(HF_REG_IN_GICP_REF_COV_B);
-const DenseKernel kKernel = make_dense_kernel<hf_gicp_params, hf_gicp_pixel>("gicp", kInputs, 3);
+const DenseKernel kGicpKernel = make_dense_kernel<hf_gicp_params, hf_gicp_pixel>("gicp", kGicpInputs, 3);
 
 // The regularised covariance of pixel (x, y), or false: mean and scatter of the gated window, then Segal's
 // U diag(epsilon, 1, 1) U^T in the scatter's eigenbasis (eigenvalues ascending: the normal first).
@@ -67,7 +67,7 @@ bool pixel_covariance(const VertexMap& vertices, int x, int y, float gate_px_m, 
 class GicpMethod final : public DenseMethod {
  public:
   explicit GicpMethod(const GicpOptions& options) : options_(options), params_(options.kernel_params()) {}
-  const DenseKernel& kernel() const override { return kKernel; }
+  const DenseKernel& kernel() const override { return kGicpKernel; }
   void begin_level(int level, const FramePyramidLevel& current, const FramePyramidLevel& reference,
                    ResidualProblem& problem) override {
     params_.step = level == 0 ? options_.finest_level_gicp_step : 1;
@@ -91,9 +91,9 @@ class GicpMethod final : public DenseMethod {
   std::vector<hf_float4> cur_a_, cur_b_, ref_a_, ref_b_;
 };
 
-RegistrationOptions defaults() { return RegistrationOptions(GaussNewtonOptions{}, std::make_unique<GicpOptions>()); }
+RegistrationOptions gicp_defaults() { return RegistrationOptions(GaussNewtonOptions{}, std::make_unique<GicpOptions>()); }
 
-std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend> backend) {
+std::unique_ptr<Registration> make_gicp(const RegistrationOptions& options, std::unique_ptr<ReductionBackend> backend) {
   return std::make_unique<GaussNewtonRegistration>(
       "gicp", std::make_unique<GicpMethod>(options.method_as<GicpOptions>()), options, std::move(backend));
 }
@@ -161,6 +161,6 @@ hf_gicp_params GicpOptions::kernel_params() const {
   return p;
 }
 
-RegistrationMethod gicp_registration_method() { return {"gicp", defaults, make}; }
+RegistrationMethod gicp_registration_method() { return {"gicp", gicp_defaults, make_gicp}; }
 
 }  // namespace hf

@@ -10,14 +10,14 @@
 namespace hf {
 namespace {
 
-constexpr unsigned kInputs = HF_REG_IN_BIT(HF_REG_IN_CUR_VERTICES) | HF_REG_IN_BIT(HF_REG_IN_CUR_NORMALS) |
+constexpr unsigned kIcpInputs = HF_REG_IN_BIT(HF_REG_IN_CUR_VERTICES) | HF_REG_IN_BIT(HF_REG_IN_CUR_NORMALS) |
                              HF_REG_IN_BIT(HF_REG_IN_REF_VERTICES) | HF_REG_IN_BIT(HF_REG_IN_REF_NORMALS);
-const DenseKernel kKernel = make_dense_kernel<hf_icp_params, hf_icp_pixel>("icp", kInputs, 1, &detail::icp_rows_avx2);
+const DenseKernel kIcpKernel = make_dense_kernel<hf_icp_params, hf_icp_pixel>("icp", kIcpInputs, 1, &detail::icp_rows_avx2);
 
 class IcpMethod final : public DenseMethod {
  public:
   explicit IcpMethod(const IcpOptions& options) : params_(options.kernel_params()) {}
-  const DenseKernel& kernel() const override { return kKernel; }
+  const DenseKernel& kernel() const override { return kIcpKernel; }
   void begin_level(int, const FramePyramidLevel&, const FramePyramidLevel&, ResidualProblem&) override {}
   const void* params() const override { return &params_; }
   double rows_possible(const FramePyramidLevel& current) const override {
@@ -28,9 +28,9 @@ class IcpMethod final : public DenseMethod {
   hf_icp_params params_;
 };
 
-RegistrationOptions defaults() { return RegistrationOptions(GaussNewtonOptions{}, std::make_unique<IcpOptions>()); }
+RegistrationOptions icp_defaults() { return RegistrationOptions(GaussNewtonOptions{}, std::make_unique<IcpOptions>()); }
 
-std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend> backend) {
+std::unique_ptr<Registration> make_icp(const RegistrationOptions& options, std::unique_ptr<ReductionBackend> backend) {
   return std::make_unique<GaussNewtonRegistration>(
       "icp", std::make_unique<IcpMethod>(options.method_as<IcpOptions>()), options, std::move(backend));
 }
@@ -68,8 +68,8 @@ hf_icp_params IcpOptions::kernel_params(float weight) const {
   return p;
 }
 
-const DenseKernel& icp_kernel() { return kKernel; }
+const DenseKernel& icp_kernel() { return kIcpKernel; }
 
-RegistrationMethod icp_registration_method() { return {"icp", defaults, make}; }
+RegistrationMethod icp_registration_method() { return {"icp", icp_defaults, make_icp}; }
 
 }  // namespace hf

@@ -167,21 +167,21 @@ SE3 levenberg_marquardt(const std::vector<NdtLevel>& levels, int iterations, con
 }
 
 // Surfel pairs at the finest level below which the estimate is failed, as ndt-d2d.
-constexpr long kMinTerms = 20;
+constexpr long kMrsmapMinTerms = 20;
 
-RegistrationResult solve(const RegistrationOptions& options, const NdtSamples& cur, const NdtSamples& ref,
+RegistrationResult mrsmap_solve(const RegistrationOptions& options, const NdtSamples& cur, const NdtSamples& ref,
                          const SE3& T0) {
   const MrsmapOptions& o = options.method_as<MrsmapOptions>();
   const std::vector<SurfelLevel> cur_map = surfel_map(cur, o);
   const std::vector<SurfelLevel> ref_map = surfel_map(ref, o);
   const NdtSolveOptions so =
-      ndt_solve_options(options, cur.points, double(cur_map.back().grid.size()), kMinTerms);
+      ndt_solve_options(options, cur.points, double(cur_map.back().grid.size()), kMrsmapMinTerms);
   const std::vector<NdtLevel> levels = surfel_levels(cur_map, ref_map, o.descriptor_max_distance);
   const SE3 T_lm = levenberg_marquardt(levels, o.lm_iterations, T0, so, options.driver);
   return solve_ndt(levels, so, options.driver, T0, &T_lm);
 }
 
-RegistrationOptions defaults() {
+RegistrationOptions mrsmap_defaults() {
   GaussNewtonOptions driver;
   driver.iterations = {10, 10, 10, 10};  // Newton per resolution, [0] the finest (0.05 m), as ndt-d2d
   auto mrsmap = std::make_unique<MrsmapOptions>();
@@ -189,12 +189,12 @@ RegistrationOptions defaults() {
   return RegistrationOptions(driver, std::move(mrsmap));
 }
 
-std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
-  return make_ndt_registration("mrsmap", options, solve, /*reads_colour=*/true);
+std::unique_ptr<Registration> make_mrsmap(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
+  return make_ndt_registration("mrsmap", options, mrsmap_solve, /*reads_colour=*/true);
 }
 
 }  // namespace
 
-RegistrationMethod mrsmap_registration_method() { return {"mrsmap", defaults, make}; }
+RegistrationMethod mrsmap_registration_method() { return {"mrsmap", mrsmap_defaults, make_mrsmap}; }
 
 }  // namespace hf

@@ -199,7 +199,7 @@ std::vector<NdtLevel> colour_levels(const NdtSamples& cur, const std::vector<std
   return levels;
 }
 
-RegistrationResult solve(const RegistrationOptions& options, const NdtSamples& cur, const NdtSamples& ref,
+RegistrationResult ndt_color_solve(const RegistrationOptions& options, const NdtSamples& cur, const NdtSamples& ref,
                          const SE3& T0) {
   const NdtColorOptions& o = options.method_as<NdtColorOptions>();
   if (!cur.has_intensity() || !ref.has_intensity()) {
@@ -218,18 +218,18 @@ RegistrationResult solve(const RegistrationOptions& options, const NdtSamples& c
   return solve_ndt(colour_levels(cur, model, cells_m, o.neighbours), so, options.driver, T0);
 }
 
-RegistrationOptions defaults() {
+RegistrationOptions ndt_color_defaults() {
   GaussNewtonOptions driver;
   driver.iterations = {10, 10, 10};  // per resolution, [0] the finest (0.1 m), as ndt-p2d
   return RegistrationOptions(driver, std::make_unique<NdtColorOptions>());
 }
 
-std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
-  return make_ndt_registration("ndt-color", options, solve, /*reads_colour=*/true);
+std::unique_ptr<Registration> make_ndt_color(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
+  return make_ndt_registration("ndt-color", options, ndt_color_solve, /*reads_colour=*/true);
 }
 
 }  // namespace
 
-RegistrationMethod ndt_color_registration_method() { return {"ndt-color", defaults, make}; }
+RegistrationMethod ndt_color_registration_method() { return {"ndt-color", ndt_color_defaults, make_ndt_color}; }
 
 }  // namespace hf

@@ -32,19 +32,19 @@ std::vector<NdtLevel> d2d_levels(const NdtModel& current, const NdtModel& refere
 }
 
 // Cell pairs at the finest level below which the estimate is failed: a 0.1 m model of a room view has ~500 cells.
-constexpr long kMinTerms = 20;
+constexpr long kNdtD2dMinTerms = 20;
 
-RegistrationResult solve(const RegistrationOptions& options, const NdtSamples& cur, const NdtSamples& ref,
+RegistrationResult ndt_d2d_solve(const RegistrationOptions& options, const NdtSamples& cur, const NdtSamples& ref,
                          const SE3& T0) {
   const NdtOptions& o = options.method_as<NdtOptions>();
   const NdtModel cur_model = build_ndt_model(cur.points, o.resolutions_m(), o.grid);
   const NdtModel ref_model = build_ndt_model(ref.points, o.resolutions_m(), o.grid);
   const NdtSolveOptions so =
-      ndt_solve_options(options, cur.points, double(cur_model.levels.back().size()), kMinTerms);
+      ndt_solve_options(options, cur.points, double(cur_model.levels.back().size()), kNdtD2dMinTerms);
   return solve_ndt(d2d_levels(cur_model, ref_model), so, options.driver, T0);
 }
 
-RegistrationOptions defaults() {
+RegistrationOptions ndt_d2d_defaults() {
   GaussNewtonOptions driver;
   driver.iterations = {10, 10, 10, 10};  // per resolution, [0] the finest (0.05 m)
   auto ndt = std::make_unique<NdtOptions>();
@@ -54,12 +54,12 @@ RegistrationOptions defaults() {
   return RegistrationOptions(driver, std::move(ndt));
 }
 
-std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
-  return make_ndt_registration("ndt-d2d", options, solve);
+std::unique_ptr<Registration> make_ndt_d2d(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
+  return make_ndt_registration("ndt-d2d", options, ndt_d2d_solve);
 }
 
 }  // namespace
 
-RegistrationMethod ndt_d2d_registration_method() { return {"ndt-d2d", defaults, make}; }
+RegistrationMethod ndt_d2d_registration_method() { return {"ndt-d2d", ndt_d2d_defaults, make_ndt_d2d}; }
 
 }  // namespace hf

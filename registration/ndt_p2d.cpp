@@ -30,7 +30,7 @@ std::vector<NdtLevel> p2d_levels(const std::vector<Eigen::Vector3d>& points, con
   return levels;
 }
 
-RegistrationResult solve(const RegistrationOptions& options, const NdtSamples& cur, const NdtSamples& ref,
+RegistrationResult ndt_p2d_solve(const RegistrationOptions& options, const NdtSamples& cur, const NdtSamples& ref,
                          const SE3& T0) {
   const NdtOptions& o = options.method_as<NdtOptions>();
   const NdtModel model = build_ndt_model(ref.points, o.resolutions_m(), o.grid);
@@ -39,7 +39,7 @@ RegistrationResult solve(const RegistrationOptions& options, const NdtSamples& c
   return solve_ndt(p2d_levels(cur.points, model, o.neighbours), so, options.driver, T0);
 }
 
-RegistrationOptions defaults() {
+RegistrationOptions ndt_p2d_defaults() {
   GaussNewtonOptions driver;
   driver.iterations = {10, 10, 10};  // per resolution, [0] the finest (0.1 m)
   // point_stride 2 (19200 points at 320x240, each against up to 7 cells): its cost, 290-350 ms of tracking per
@@ -48,12 +48,12 @@ RegistrationOptions defaults() {
   return RegistrationOptions(driver, std::make_unique<NdtOptions>());
 }
 
-std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
-  return make_ndt_registration("ndt-p2d", options, solve);
+std::unique_ptr<Registration> make_ndt_p2d(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
+  return make_ndt_registration("ndt-p2d", options, ndt_p2d_solve);
 }
 
 }  // namespace
 
-RegistrationMethod ndt_p2d_registration_method() { return {"ndt-p2d", defaults, make}; }
+RegistrationMethod ndt_p2d_registration_method() { return {"ndt-p2d", ndt_p2d_defaults, make_ndt_p2d}; }
 
 }  // namespace hf

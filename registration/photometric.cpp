@@ -11,16 +11,16 @@
 namespace hf {
 namespace {
 
-constexpr unsigned kInputs = HF_REG_IN_BIT(HF_REG_IN_CUR_VERTICES) | HF_REG_IN_BIT(HF_REG_IN_CUR_INTENSITY) |
+constexpr unsigned kPhotometricInputs = HF_REG_IN_BIT(HF_REG_IN_CUR_VERTICES) | HF_REG_IN_BIT(HF_REG_IN_CUR_INTENSITY) |
                              HF_REG_IN_BIT(HF_REG_IN_REF_VERTICES) | HF_REG_IN_BIT(HF_REG_IN_REF_INTENSITY) |
                              HF_REG_IN_BIT(HF_REG_IN_REF_GRAD_X) | HF_REG_IN_BIT(HF_REG_IN_REF_GRAD_Y);
-const DenseKernel kKernel = make_dense_kernel<hf_photometric_params, hf_photometric_pixel>(
-    "photometric", kInputs, 1, &detail::photometric_rows_avx2);
+const DenseKernel kPhotometricKernel = make_dense_kernel<hf_photometric_params, hf_photometric_pixel>(
+    "photometric", kPhotometricInputs, 1, &detail::photometric_rows_avx2);
 
 class PhotometricMethod final : public DenseMethod {
  public:
   explicit PhotometricMethod(const PhotometricOptions& options) : options_(options) {}
-  const DenseKernel& kernel() const override { return kKernel; }
+  const DenseKernel& kernel() const override { return kPhotometricKernel; }
   void begin_level(int level, const FramePyramidLevel& current, const FramePyramidLevel& reference,
                    ResidualProblem& problem) override {
     params_ = options_.kernel_params(level, 1.0f, options_.t_sigma_rgb_init);
@@ -43,13 +43,13 @@ class PhotometricMethod final : public DenseMethod {
   hf_photometric_params params_{};
 };
 
-RegistrationOptions defaults() {
+RegistrationOptions photometric_defaults() {
   GaussNewtonOptions driver;
   driver.iterations = {20, 10, 10};
   return RegistrationOptions(driver, std::make_unique<PhotometricOptions>());
 }
 
-std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend> backend) {
+std::unique_ptr<Registration> make_photometric(const RegistrationOptions& options, std::unique_ptr<ReductionBackend> backend) {
   return std::make_unique<GaussNewtonRegistration>(
       "photometric", std::make_unique<PhotometricMethod>(options.method_as<PhotometricOptions>()), options,
       std::move(backend));
@@ -160,8 +160,8 @@ double PhotometricOptions::rows_possible(const FramePyramidLevel& current) const
   return double(count_valid_pixels(current.vertices, finest_level_photometric_step));
 }
 
-const DenseKernel& photometric_kernel() { return kKernel; }
+const DenseKernel& photometric_kernel() { return kPhotometricKernel; }
 
-RegistrationMethod photometric_registration_method() { return {"photometric", defaults, make}; }
+RegistrationMethod photometric_registration_method() { return {"photometric", photometric_defaults, make_photometric}; }
 
 }  // namespace hf

@@ -75,7 +75,7 @@ DenseKernel make_sdf_kernel() {
   k.rows = &sdf_rows;
   return k;
 }
-const DenseKernel kKernel = make_sdf_kernel();
+const DenseKernel kSdfKernel = make_sdf_kernel();
 
 // The map in the kernel's flat layout (fusion/flat_block_map.h), built only when a device backend asks for it
 // (KernelBuffer): one copy of every block, once per map version (a set_volume or a pairwise fusion), whatever
@@ -142,7 +142,7 @@ class SdfMethod final : public DenseMethod {
     params_.k.robust =
         robust_params(options.robust_sdf, options.huber_sdf_m, options.t_sigma_sdf_m, options.t_dof_sdf);
   }
-  const DenseKernel& kernel() const override { return kKernel; }
+  const DenseKernel& kernel() const override { return kSdfKernel; }
   const void* params() const override { return &params_; }
   double rows_possible(const FramePyramidLevel& current) const override {
     return double(count_valid_pixels(current.vertices, options_.finest_level_step));
@@ -215,13 +215,13 @@ class SdfMethod final : public DenseMethod {
 // trilinear cell, so a step lands where the linearisation of that cell puts it and Gauss-Newton needs more of them
 // than projective ICP. Chosen on fr1/rpy frames 0-149: ATE 8.96 cm at 10 / 5 / 4, 6.68 at 20 / 10 / 10, 6.78 at
 // 40 / 20 / 20 (bench/results/sdf_tracking.md).
-RegistrationOptions defaults() {
+RegistrationOptions sdf_defaults() {
   GaussNewtonOptions driver;
   driver.iterations = {20, 10, 10};
   return RegistrationOptions(driver, std::make_unique<SdfOptions>());
 }
 
-std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend> backend) {
+std::unique_ptr<Registration> make_sdf(const RegistrationOptions& options, std::unique_ptr<ReductionBackend> backend) {
   return std::make_unique<GaussNewtonRegistration>(
       "sdf", std::make_unique<SdfMethod>(options.method_as<SdfOptions>()), options, std::move(backend));
 }
@@ -251,6 +251,6 @@ void SdfOptions::validate() const {
   require_option(own_truncation_vox >= 1.0 && own_truncation_vox <= 64.0, "own_truncation_vox must be in [1, 64]");
 }
 
-RegistrationMethod sdf_registration_method() { return {"sdf", defaults, make}; }
+RegistrationMethod sdf_registration_method() { return {"sdf", sdf_defaults, make_sdf}; }
 
 }  // namespace hf

@@ -82,9 +82,9 @@ class SparseRegistration final : public Registration {
   FeatureOptions features_;
 };
 
-RegistrationOptions defaults() { return RegistrationOptions(GaussNewtonOptions{}, std::make_unique<SparseOptions>()); }
+RegistrationOptions sparse_defaults() { return RegistrationOptions(GaussNewtonOptions{}, std::make_unique<SparseOptions>()); }
 
-std::unique_ptr<Registration> make(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
+std::unique_ptr<Registration> make_sparse(const RegistrationOptions& options, std::unique_ptr<ReductionBackend>) {
   return std::make_unique<SparseRegistration>(options);
 }
 
@@ -178,6 +178,6 @@ void SparseOptions::validate() const {
   require_option(min_feature_inliers >= 3, "min_feature_inliers must be >= 3");
 }
 
-RegistrationMethod sparse_registration_method() { return {"sparse", defaults, make}; }
+RegistrationMethod sparse_registration_method() { return {"sparse", sparse_defaults, make_sparse}; }
 
 }  // namespace hf

@@ -15,15 +15,12 @@
 #ifdef HF_HAVE_FUSION_OPENCL
 #include "fusion/opencl/device_voxel_grid.h"
 #include "registration/opencl/device_pyramid.h"
-#include "registration/opencl/opencl_context.h"
+#include "core/opencl/opencl_context.h"
+#include "core/timing.h"
 #endif
 
 namespace hf::slam {
 namespace {
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // Share of the frame's depth that agrees with a reference depth image where it lands (see
 // PipelineConfig::min_consistent): (pixels sampled, pixels landing on the reference, pixels agreeing).

@@ -1,4 +1,5 @@
 #include "slam/pose_graph.h"
+#include "core/timing.h"
 
 #include <ceres/autodiff_cost_function.h>
 #include <ceres/loss_function.h>
@@ -129,10 +130,6 @@ double robust(double chi2, const PoseGraphEdge& edge, const PoseGraphOptions& op
 
 // Levenberg-Marquardt iterations of a solve (Ceres' list starts with the initial point).
 int iterations_of(const ceres::Solver::Summary& summary) { return std::max(0, int(summary.iterations.size()) - 1); }
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // The first problem with the graph's inputs, or "" when they are usable.
 std::string check_inputs(const std::vector<SE3>& nodes, const std::vector<PoseGraphEdge>& edges,

@@ -17,6 +17,31 @@
 #include "viewer/mesh_renderer.h"
 
 namespace hf::viewer {
+
+// RunViewer::Impl's member types live in a named namespace, not the anonymous one: a class of the library may
+// not hold types of an anonymous namespace once this file is not the translation unit's main file, as in unity
+// builds (gcc -Wsubobject-linkage).
+namespace run_viewer_detail {
+
+// A model raycast and the view it was taken from.
+struct ModelView {
+  PinholeCamera camera;
+  SE3 T_world_view;
+  ColorImage shaded;
+  DepthImage depth;
+};
+
+struct Shot {
+  std::string path;
+  size_t track = 0;  // what the trajectory held at that frame
+  SE3 T_world_camera;
+  ModelView model;
+};
+
+}  // namespace run_viewer_detail
+using run_viewer_detail::ModelView;
+using run_viewer_detail::Shot;
+
 namespace {
 
 constexpr int kWindowW = 1280, kWindowH = 720, kViewW = 853;  // the 3-D view takes the left two thirds
@@ -42,14 +67,6 @@ ColorImage depth_as_grey(const DepthImage& d) {
   return out;
 }
 
-// A model raycast and the view it was taken from.
-struct ModelView {
-  PinholeCamera camera;
-  SE3 T_world_view;
-  ColorImage shaded;
-  DepthImage depth;
-};
-
 ModelView render_model(const fusion::VoxelBlockGrid& map, const PinholeCamera& camera, const SE3& T_world_view) {
   fusion::RaycastResult r = fusion::raycast(map, camera, T_world_view, model_view_options());
   return {camera, T_world_view, std::move(r.shaded), std::move(r.depth)};
@@ -64,13 +81,6 @@ PinholeCamera model_view_camera(int viewport_w, int viewport_h) {
 bool same_view(const PinholeCamera& a, const SE3& Ta, const PinholeCamera& b, const SE3& Tb) {
   return a.width == b.width && a.height == b.height && (Ta.matrix() - Tb.matrix()).norm() < 1e-9;
 }
-
-struct Shot {
-  std::string path;
-  size_t track = 0;  // what the trajectory held at that frame
-  SE3 T_world_camera;
-  ModelView model;
-};
 
 }  // namespace
 

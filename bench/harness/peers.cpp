@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "core/timing.h"
 
 #ifdef HF_BENCH_HAVE_PCL
 #include "bench/pcl_reference.h"
@@ -18,13 +19,6 @@
 #endif
 
 namespace hf::bench {
-namespace {
-
-double ms_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
-
-}  // namespace
 
 std::vector<std::string> peer_names() {
   std::vector<std::string> names;

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "registration/opencl/opencl_context.h"
+#include "core/opencl/opencl_context.h"
 
 namespace hf::opencl {
 

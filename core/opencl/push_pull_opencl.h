@@ -4,7 +4,7 @@
 // non-finite count is exact; the result equals the C++ one to float rounding (division is correctly rounded on
 // both; tests/core/test_push_pull.cpp holds them to 1e-6 relative).
 //
-// The device, context and program cache are registration/opencl/opencl_context.h's (HF_OPENCL_DEVICE chooses the
+// The device, context and program cache are core/opencl/opencl_context.h's (HF_OPENCL_DEVICE chooses the
 // device). Errors: hf::Error when no OpenCL platform is installed or a call fails (message names the call).
 // Thread-safety: one PushPullOpenCl per thread (it owns its queue); several may share a Context.
 #pragma once

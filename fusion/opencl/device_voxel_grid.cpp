@@ -14,7 +14,8 @@
 
 #include "fusion/kernels/block_hash.h"
 #include "fusion/kernels/raycast_kernels.h"
-#include "registration/opencl/opencl_context.h"
+#include "core/opencl/opencl_context.h"
+#include "core/timing.h"
 
 namespace hf::opencl {
 // fusion/opencl/integrate.cl with the shared headers inlined (embed_opencl.cmake, fusion/opencl/CMakeLists.txt).
@@ -36,10 +37,6 @@ constexpr size_t kUpdateGroup = 64;  // work-items per group of the 1-D kernels 
 
 using Entry = hf_block_entry;  // fusion/kernels/block_hash.h
 static_assert(sizeof(Entry) == 16, "hf_block_entry");
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 size_t round_up(size_t n, size_t m) { return (n + m - 1) / m * m; }
 

@@ -1,6 +1,6 @@
 // The voxel-block map on an OpenCL device, integrate() and the tracking raycast there (issue 20).
 //
-//   auto ctx = hf::opencl::Context::shared();           // registration/opencl/opencl_context.h: device choice
+//   auto ctx = hf::opencl::Context::shared();           // core/opencl/opencl_context.h: device choice
 //   hf::fusion::DeviceVoxelGrid map(volume, ctx);        // volume: VolumeParams (validated)
 //   map.integrate(depth, colour, camera, T_world_camera, params);  // as fusion::integrate, on the device
 //   map.raycast(camera, T_world_camera, raycast_options, &model);  // as fusion::raycast

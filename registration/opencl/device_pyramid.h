@@ -22,7 +22,7 @@
 #include "core/camera.h"
 #include "core/image.h"
 #include "registration/frame_pyramid.h"
-#include "registration/opencl/opencl_context.h"
+#include "core/opencl/opencl_context.h"
 
 namespace hf::opencl {
 

@@ -30,7 +30,7 @@
 #include <string>
 #include <vector>
 
-#include "registration/opencl/opencl_context.h"
+#include "core/opencl/opencl_context.h"
 #include "registration/reduction.h"
 
 namespace hf {

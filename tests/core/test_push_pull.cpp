@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "core/opencl/push_pull_opencl.h"
-#include "registration/opencl/opencl_context.h"
+#include "core/opencl/opencl_context.h"
 
 namespace hf {
 namespace {

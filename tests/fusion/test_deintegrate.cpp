@@ -36,7 +36,7 @@ bool observed(const VoxelBlock& block) {
   return false;
 }
 
-VolumeParams params_1cm(float max_weight = 128.0f) {
+VolumeParams deintegrate_params_1cm(float max_weight = 128.0f) {
   VolumeParams p;
   p.voxel_m = 0.01;
   p.max_weight = max_weight;
@@ -45,7 +45,7 @@ VolumeParams params_1cm(float max_weight = 128.0f) {
 }
 
 // The room preset (with its sensor noise) seen by a 160x120 camera.
-datasets::SyntheticSequence room(int frames) {
+datasets::SyntheticSequence deintegrate_room(int frames) {
   datasets::SyntheticOptions options;
   options.preset = "room";
   options.frames = frames;
@@ -76,12 +76,12 @@ int colour_units(const Voxel& a, const Voxel& b) {
 // 1 unit (colour); weights are exact. Blocks frame 4 created are collected; blocks that existed stay (except ones
 // that held no observation at all, which deintegrate collects as well).
 TEST(Deintegrate, RestoresEveryVoxelWithinItsQuantisationStep) {
-  const auto seq = room(5);
+  const auto seq = deintegrate_room(5);
   for (const bool point_to_plane : {false, true}) {
     SCOPED_TRACE(point_to_plane ? "point-to-plane" : "projective");
     IntegrateParams params;
     params.point_to_plane = point_to_plane;
-    VoxelBlockGrid grid(params_1cm());
+    VoxelBlockGrid grid(deintegrate_params_1cm());
     for (int f = 0; f < 4; ++f) fuse(grid, seq.frame(f), seq.camera(), params);
     const Snapshot before = snapshot(grid);
     const auto frame = seq.frame(4);
@@ -121,7 +121,7 @@ TEST(Deintegrate, RestoresEveryVoxelWithinItsQuantisationStep) {
     expect_surface_free_flags_exact(grid);
 
     // On an empty grid the frame was everything: nothing is left.
-    VoxelBlockGrid alone(params_1cm());
+    VoxelBlockGrid alone(deintegrate_params_1cm());
     fuse(alone, frame, seq.camera(), params);
     const size_t blocks = alone.block_count();
     const DeintegrateStats gone = deintegrate(alone, frame.depth, frame.color, seq.camera(), frame.T_world_camera, params);
@@ -135,9 +135,9 @@ TEST(Deintegrate, RestoresEveryVoxelWithinItsQuantisationStep) {
 // within 2 units where B alone has colour. Where A gave a voxel its first colour and B only carved it, A's colour
 // stays (deintegrate.h): every voxel with a colour B alone does not give must be one of those, with A's colour.
 TEST(Deintegrate, FusingAAndBThenTakingAOutLeavesB) {
-  const auto seq = room(9);
+  const auto seq = deintegrate_room(9);
   const auto a = seq.frame(2), b = seq.frame(8);
-  VoxelBlockGrid both(params_1cm()), a_alone(params_1cm()), b_alone(params_1cm());
+  VoxelBlockGrid both(deintegrate_params_1cm()), a_alone(deintegrate_params_1cm()), b_alone(deintegrate_params_1cm());
   fuse(a_alone, a, seq.camera());
   fuse(both, a, seq.camera());
   fuse(both, b, seq.camera());
@@ -194,8 +194,8 @@ TEST(Deintegrate, FusingAAndBThenTakingAOutLeavesB) {
 // Which voxels frame 6 observes, and its observation d, come from fusing it alone (W = w: sdf = d to half a step).
 TEST(Deintegrate, WeightCapGivesTheApproximateInverse) {
   const float cap = 4.0f, w = 1.0f;
-  const auto seq = room(7);
-  VoxelBlockGrid grid(params_1cm(cap)), alone(params_1cm(cap));
+  const auto seq = deintegrate_room(7);
+  VoxelBlockGrid grid(deintegrate_params_1cm(cap)), alone(deintegrate_params_1cm(cap));
   for (int f = 0; f < 6; ++f) fuse(grid, seq.frame(f), seq.camera());
   const Snapshot before = snapshot(grid);
   const auto frame = seq.frame(6);
@@ -408,10 +408,10 @@ TEST(Deintegrate, Avx2BlockLoopIsThePlainOne) {
 // A frame fused at a wrong pose and moved by reintegrate() gives the field of fusing it at the right pose (weights
 // exact, sdf within 2 steps: order of the two averages and the rounding of the removal).
 TEST(Deintegrate, ReintegrateMovesAFrameToItsNewPose) {
-  const auto seq = room(9);
+  const auto seq = deintegrate_room(9);
   const auto a = seq.frame(4), b = seq.frame(0);
   const SE3 wrong = a.T_world_camera * SE3::exp((Vector6d() << 0.02, -0.01, 0.03, 0.05, 0.02, -0.04).finished());
-  VoxelBlockGrid moved(params_1cm()), right(params_1cm());
+  VoxelBlockGrid moved(deintegrate_params_1cm()), right(deintegrate_params_1cm());
   integrate(moved, a.depth, a.color, seq.camera(), wrong);
   fuse(moved, b, seq.camera());
   const ReintegrateStats stats = reintegrate(moved, a.depth, a.color, seq.camera(), wrong, a.T_world_camera);
@@ -440,9 +440,9 @@ TEST(Deintegrate, ReintegrateMovesAFrameToItsNewPose) {
 
 // Bad sizes throw integrate's hf::Error before anything changes.
 TEST(Deintegrate, SizeMismatchThrowsAndChangesNothing) {
-  const auto seq = room(1);
+  const auto seq = deintegrate_room(1);
   const auto f = seq.frame(0);
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(deintegrate_params_1cm());
   fuse(grid, f, seq.camera());
   const Snapshot before = snapshot(grid);
   const ColorImage wrong_colour(8, 8);

@@ -18,7 +18,7 @@ namespace {
 
 constexpr double kVoxel = 0.01;
 
-VolumeParams params_1cm() {
+VolumeParams fusion_sphere_params_1cm() {
   VolumeParams p;
   p.voxel_m = kVoxel;
   p.capacity_blocks = 1 << 15;
@@ -59,7 +59,7 @@ SphereResult fuse_noise_free_sphere(const IntegrateParams& params) {
   std::vector<SE3> poses = datasets::hemisphere_poses(c, 1.3, 20);
   for (const SE3& T : datasets::ring_poses(c, 1.3, 10, -0.6)) poses.push_back(T);
   EXPECT_EQ(poses.size(), 30u);
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(fusion_sphere_params_1cm());
   for (const SE3& T : poses)
     integrate(grid, testing::render_sphere_depth(camera, T, c, r), ColorImage(), camera, T, params);
 
@@ -152,7 +152,7 @@ TEST(FusionSphere, KinectNoiseIsAveragedAway) {
   o.camera = PinholeCamera::preset("ros").scaled(1);
   o.noise_enabled = true;
   const datasets::SyntheticSequence seq(o);
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(fusion_sphere_params_1cm());
   std::vector<double> rms;
   // 30 frames spread over the full ring (every 8th frame), errors after 2, 6 and 30 of them. Only the region all
   // of those frames can see is compared, through the minimum-weight filter (the mesh of a part seen once is as

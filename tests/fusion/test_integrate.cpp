@@ -21,7 +21,7 @@ using testing::render_sphere_depth;
 
 PinholeCamera small_camera() { return PinholeCamera::preset("ros").scaled(2); }  // 160x120
 
-VolumeParams params_1cm(size_t capacity = 1 << 15) {
+VolumeParams integrate_params_1cm(size_t capacity = 1 << 15) {
   VolumeParams p;
   p.voxel_m = 0.01;
   p.truncation_vox = 4.0;
@@ -48,7 +48,7 @@ Eigen::Vector3d voxel_centre(const VolumeParams& p, const BlockCoord& c, int x, 
 // must hold min(1, sdf / mu) up to the int16 step (and float rounding of the depth and the voxel position).
 TEST(Integrate, FrontoParallelPlaneGivesAnalyticSdf) {
   const PinholeCamera camera = small_camera();
-  const VolumeParams volume = params_1cm();
+  const VolumeParams volume = integrate_params_1cm();
   VoxelBlockGrid grid(volume);
   const double plane_z = 1.2345;
   const SE3 T_world_camera = SE3::identity();
@@ -127,7 +127,7 @@ struct TiltedPlane {
 // the sign of the stored value agrees with the true signed distance away from the surface.
 TEST(Integrate, TiltedPlaneMatchesProjectiveTsdf) {
   const TiltedPlane plane;
-  const VolumeParams volume = params_1cm();
+  const VolumeParams volume = integrate_params_1cm();
   VoxelBlockGrid grid(volume);
   plane.fuse(grid, /*point_to_plane=*/false);
   const SE3 T_camera_world = plane.T_world_camera.inverse();
@@ -201,7 +201,7 @@ TEST(Integrate, PointToPlaneFactorOfAPlane) {
 // point (at most half a pixel in u and v) along the normal.
 TEST(Integrate, TiltedPlaneGivesTrueDistanceWithPointToPlane) {
   const TiltedPlane plane;
-  const VolumeParams volume = params_1cm();
+  const VolumeParams volume = integrate_params_1cm();
   VoxelBlockGrid grid(volume);
   plane.fuse(grid, /*point_to_plane=*/true);
   const SE3 T_camera_world = plane.T_world_camera.inverse();
@@ -238,7 +238,7 @@ TEST(Integrate, TiltedPlaneGivesTrueDistanceWithPointToPlane) {
 // and the running average shrinks earlier errors), the weight is exact, the colour within (n + 1) / 4 + 1 levels.
 TEST(Integrate, QuantisationCostsNoAccuracyAgainstFloatReference) {
   const datasets::SyntheticSequence seq = small_sequence("sphere", 12);
-  const VolumeParams volume = params_1cm();
+  const VolumeParams volume = integrate_params_1cm();
   VoxelBlockGrid grid(volume);
   const float mu = float(volume.truncation_m());
 
@@ -320,7 +320,7 @@ TEST(Integrate, QuantisationCostsNoAccuracyAgainstFloatReference) {
 TEST(Integrate, MemoryGrowsWithSurfaceArea) {
   const PinholeCamera camera = small_camera();
   auto blocks_for = [&](double radius) {
-    VoxelBlockGrid grid(params_1cm());
+    VoxelBlockGrid grid(integrate_params_1cm());
     std::vector<SE3> poses = datasets::hemisphere_poses(Eigen::Vector3d::Zero(), 3 * radius, 8);
     for (const SE3& T : datasets::ring_poses(Eigen::Vector3d::Zero(), 3 * radius, 4, -0.6)) poses.push_back(T);
     for (const SE3& T : poses)
@@ -336,7 +336,7 @@ TEST(Integrate, MemoryGrowsWithSurfaceArea) {
 
 TEST(Integrate, InvalidDepthNeverAllocates) {
   const PinholeCamera camera = small_camera();
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(integrate_params_1cm());
   DepthImage depth(camera.width, camera.height, 0.0f);
   for (int v = 0; v < camera.height; ++v)
     for (int u = 0; u < camera.width; ++u) {
@@ -374,7 +374,7 @@ TEST(Integrate, InvalidDepthNeverAllocates) {
 
 TEST(Integrate, WeightCapAndColourAverage) {
   const PinholeCamera camera = small_camera();
-  VolumeParams volume = params_1cm();
+  VolumeParams volume = integrate_params_1cm();
   volume.max_weight = 5.0f;
   VoxelBlockGrid grid(volume);
   const DepthImage depth = render_plane_depth(camera, SE3::identity(), Eigen::Vector3d::UnitZ(), 1.0);
@@ -423,7 +423,7 @@ TEST(Integrate, KernelRejectsBehindSurfaceAndUpdatesFreeSpace) {
 
 TEST(Integrate, ErrorsAndDeterminism) {
   const PinholeCamera camera = small_camera();
-  VoxelBlockGrid grid(params_1cm(20));
+  VoxelBlockGrid grid(integrate_params_1cm(20));
   const DepthImage depth = render_plane_depth(camera, SE3::identity(), Eigen::Vector3d::UnitZ(), 1.0);
   EXPECT_THROW(integrate(grid, DepthImage(10, 10), ColorImage(), camera, SE3::identity()), Error);
   EXPECT_THROW(integrate(grid, depth, ColorImage(3, 3), camera, SE3::identity()), Error);
@@ -437,7 +437,7 @@ TEST(Integrate, ErrorsAndDeterminism) {
   const datasets::SyntheticSequence seq = small_sequence("sphere", 3);
   std::string bytes[2];
   for (int run = 0; run < 2; ++run) {
-    VoxelBlockGrid g(params_1cm());
+    VoxelBlockGrid g(integrate_params_1cm());
     for (int f = 0; f < seq.size(); ++f) {
       const auto frame = seq.frame(f);
       integrate(g, frame.depth, frame.color, camera, frame.T_world_camera);
@@ -452,7 +452,7 @@ TEST(Integrate, ErrorsAndDeterminism) {
 // noisy sequence both kinds of flag occur.
 TEST(Integrate, SurfaceFreeFlagsMatchTheVoxels) {
   const datasets::SyntheticSequence seq = small_sequence("room", 12);
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(integrate_params_1cm());
   size_t free_blocks = 0, surface_blocks = 0;
   for (int f = 0; f < seq.size(); f += 3) {
     const auto frame = seq.frame(f);
@@ -475,7 +475,7 @@ TEST(Integrate, SurfaceFreeFlagsMatchTheVoxels) {
 // voxel centres stepped through the block the same way.
 TEST(Integrate, UpdateLoopMatchesPerVoxelKernelBitForBit) {
   const datasets::SyntheticSequence seq = small_sequence("sphere", 3);
-  const VolumeParams volume = params_1cm();
+  const VolumeParams volume = integrate_params_1cm();
   const hf_intrinsics K = seq.camera().kernel_intrinsics();
   const float mu = float(volume.truncation_m());
   // Both distances: projective (no factor map) and point-to-plane (the per-pixel factor map).

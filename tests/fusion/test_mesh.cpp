@@ -20,11 +20,11 @@
 namespace hf::fusion {
 namespace {
 
-using SdfFn = std::function<double(const Eigen::Vector3d&)>;
+using MeshSdfFn = std::function<double(const Eigen::Vector3d&)>;
 using ColourFn = std::function<Rgb8(const Eigen::Vector3d&)>;
 
 // Allocates every block within mu + a block diagonal of the surface and writes the truncated, normalised SDF.
-void fill(VoxelBlockGrid& grid, const SdfFn& sdf, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+void fill_mesh_sdf(VoxelBlockGrid& grid, const MeshSdfFn& sdf, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
           const ColourFn& colour = nullptr, float weight = 1.0f) {
   const double v = grid.params().voxel_m, mu = grid.params().truncation_m(), B = grid.params().block_m();
   const BlockCoord a = grid.block_of(lo), b = grid.block_of(hi);
@@ -48,7 +48,7 @@ void fill(VoxelBlockGrid& grid, const SdfFn& sdf, const Eigen::Vector3d& lo, con
       }
 }
 
-VolumeParams params_1cm() {
+VolumeParams mesh_params_1cm() {
   VolumeParams p;
   p.voxel_m = 0.01;
   p.capacity_blocks = 1 << 14;
@@ -99,10 +99,10 @@ TEST(MarchingCubesTables, TrianglesUseExactlyTheCrossedEdges) {
 }
 
 TEST(Mesh, SphereIsAccurateWatertightWeldedAndOutwardAcrossBlocks) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(mesh_params_1cm());
   const Eigen::Vector3d c(0.0131, -0.0217, 0.0073);
   const double r = 0.3;
-  fill(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - r; }, c.array() - 0.45, c.array() + 0.45);
+  fill_mesh_sdf(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - r; }, c.array() - 0.45, c.array() + 0.45);
   ASSERT_GT(grid.block_count(), 100u);
   MeshStats stats;
   const TriangleMesh mesh = extract_mesh(grid, {}, &stats);
@@ -134,13 +134,13 @@ TEST(Mesh, SphereIsAccurateWatertightWeldedAndOutwardAcrossBlocks) {
 }
 
 TEST(Mesh, TiltedPlaneVerticesAndColoursAreExact) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(mesh_params_1cm());
   const Eigen::Vector3d n = Eigen::Vector3d(0.2, -0.3, 1.0).normalized();
   const double offset = 0.0123;
   auto colour = [](const Eigen::Vector3d& p) {
     return Rgb8{std::uint8_t(std::clamp(128.0 + 400.0 * p.x(), 0.0, 255.0)), 7, 9};
   };
-  fill(grid, [&](const Eigen::Vector3d& p) { return n.dot(p) - offset; }, {-0.2, -0.2, -0.2}, {0.2, 0.2, 0.2}, colour);
+  fill_mesh_sdf(grid, [&](const Eigen::Vector3d& p) { return n.dot(p) - offset; }, {-0.2, -0.2, -0.2}, {0.2, 0.2, 0.2}, colour);
   const TriangleMesh mesh = extract_mesh(grid);
   ASSERT_GT(mesh.triangles.size(), 500u);
   for (size_t i = 0; i < mesh.vertices.size(); ++i) {
@@ -157,7 +157,7 @@ TEST(Mesh, TiltedPlaneVerticesAndColoursAreExact) {
 // A random field whose outer layer is free space: every cell configuration occurs, ambiguous faces included, and
 // the surface must still close up, within and across blocks.
 TEST(Mesh, RandomFieldGivesClosedOrientedSurface) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(mesh_params_1cm());
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   const int n = 3 * HF_BLOCK_SIZE;  // 3 x 3 x 3 blocks
@@ -194,9 +194,9 @@ TEST(Mesh, RandomFieldGivesClosedOrientedSurface) {
 }
 
 TEST(Mesh, MinimumWeightFilterAndUnobservedVoxels) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(mesh_params_1cm());
   const Eigen::Vector3d c(0.011, 0.013, 0.017);
-  fill(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.1; }, c.array() - 0.2, c.array() + 0.2, nullptr,
+  fill_mesh_sdf(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.1; }, c.array() - 0.2, c.array() + 0.2, nullptr,
        2.0f);
   const size_t full = extract_mesh(grid).triangles.size();
   ASSERT_GT(full, 100u);
@@ -220,9 +220,9 @@ TEST(Mesh, MinimumWeightFilterAndUnobservedVoxels) {
 }
 
 TEST(Mesh, StreamedOutBlocksAreMeshedIdentically) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(mesh_params_1cm());
   const Eigen::Vector3d c(0.0131, -0.0217, 0.0073);
-  fill(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.2; }, c.array() - 0.3, c.array() + 0.3,
+  fill_mesh_sdf(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.2; }, c.array() - 0.3, c.array() + 0.3,
        [](const Eigen::Vector3d& p) { return Rgb8{std::uint8_t(100 + 300 * p.x()), 50, 60}; });
   const TriangleMesh before = extract_mesh(grid);
   BlockStore store;
@@ -244,8 +244,8 @@ TEST(Mesh, StreamedOutBlocksAreMeshedIdentically) {
 }
 
 TEST(Mesh, BinaryPlyRoundTrip) {
-  VoxelBlockGrid grid(params_1cm());
-  fill(grid, [](const Eigen::Vector3d& p) { return p.norm() - 0.1; }, {-0.2, -0.2, -0.2}, {0.2, 0.2, 0.2});
+  VoxelBlockGrid grid(mesh_params_1cm());
+  fill_mesh_sdf(grid, [](const Eigen::Vector3d& p) { return p.norm() - 0.1; }, {-0.2, -0.2, -0.2}, {0.2, 0.2, 0.2});
   const TriangleMesh mesh = extract_mesh(grid);
   const std::string path = (std::filesystem::temp_directory_path() / "hf_test_mesh_sphere.ply").string();
   write_ply(path, mesh);
@@ -258,7 +258,7 @@ TEST(Mesh, BinaryPlyRoundTrip) {
 }
 
 TEST(Mesh, EmptyGridGivesEmptyMesh) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(mesh_params_1cm());
   const TriangleMesh mesh = extract_mesh(grid);
   EXPECT_TRUE(mesh.vertices.empty());
   EXPECT_TRUE(mesh.triangles.empty());

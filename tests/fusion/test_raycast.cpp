@@ -27,9 +27,9 @@
 namespace hf::fusion {
 namespace {
 
-using SdfFn = std::function<double(const Eigen::Vector3d&)>;
+using RaycastSdfFn = std::function<double(const Eigen::Vector3d&)>;
 
-void fill(VoxelBlockGrid& grid, const SdfFn& sdf, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+void fill_raycast_sdf(VoxelBlockGrid& grid, const RaycastSdfFn& sdf, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
           Rgb8 colour = Rgb8{200, 100, 50}) {
   const double v = grid.params().voxel_m, mu = grid.params().truncation_m(), B = grid.params().block_m();
   const BlockCoord a = grid.block_of(lo), b = grid.block_of(hi);
@@ -52,7 +52,7 @@ void fill(VoxelBlockGrid& grid, const SdfFn& sdf, const Eigen::Vector3d& lo, con
       }
 }
 
-VolumeParams params_1cm() {
+VolumeParams raycast_params_1cm() {
   VolumeParams p;
   p.voxel_m = 0.01;
   p.capacity_blocks = 1 << 15;
@@ -93,10 +93,10 @@ TEST(RaycastKernels, TrilinearAndZeroCrossing) {
 }
 
 TEST(Raycast, SphereMatchesAnalyticDepthNormalsAndColour) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   const Eigen::Vector3d c(0.0131, -0.0217, 0.0073);
   const double r = 0.4;
-  fill(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - r; }, c.array() - 0.5, c.array() + 0.5,
+  fill_raycast_sdf(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - r; }, c.array() - 0.5, c.array() + 0.5,
        Rgb8{10, 20, 30});
   const SE3 T_world_camera = datasets::look_at({1.3, -0.4, 0.5}, c);
   const RaycastResult out = raycast(grid, kCamera, T_world_camera);
@@ -142,10 +142,10 @@ TEST(Raycast, SphereMatchesAnalyticDepthNormalsAndColour) {
 }
 
 TEST(Raycast, TiltedPlaneAcrossManyBlocksAndFarAway) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   const Eigen::Vector3d n = Eigen::Vector3d(0.1, 0.2, 1.0).normalized();
   const double offset = -0.0137;
-  fill(grid, [&](const Eigen::Vector3d& p) { return n.dot(p) - offset; }, {-1.5, -1.5, -0.5}, {1.5, 1.5, 0.5});
+  fill_raycast_sdf(grid, [&](const Eigen::Vector3d& p) { return n.dot(p) - offset; }, {-1.5, -1.5, -0.5}, {1.5, 1.5, 0.5});
   // Camera 1.2 m above, looking down obliquely, plus a camera 3 m away along the plane normal.
   for (const SE3& T : {datasets::look_at({0.3, -0.5, 1.2}, {0.0, 0.1, 0.0}), datasets::look_at({0.0, 0.0, 3.0}, {0.1, 0.0, 0.0})}) {
     const RaycastResult out = raycast(grid, kCamera, T);
@@ -175,9 +175,9 @@ TEST(Raycast, TiltedPlaneAcrossManyBlocksAndFarAway) {
 }
 
 TEST(Raycast, BackFacesAndRangeAreRespected) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   const Eigen::Vector3d c(0.0, 0.0, 0.0);
-  fill(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.4; }, {-0.6, -0.6, -0.6}, {0.6, 0.6, 0.6});
+  fill_raycast_sdf(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.4; }, {-0.6, -0.6, -0.6}, {0.6, 0.6, 0.6});
   // From inside the sphere every ray meets the surface from behind (- to +): no hits.
   const RaycastResult inside = raycast(grid, kCamera, datasets::look_at({0.05, 0.02, 0.0}, {1.0, 0.0, 0.0}));
   EXPECT_EQ(inside.hit_count, 0);
@@ -199,14 +199,14 @@ TEST(Raycast, BackFacesAndRangeAreRespected) {
 // range image must neither cut the wall off nor let the near blocks hide it; rays beside the sphere cross the
 // empty space between the two (skipped a block or a 4^3-block region at a time) and must still hit the wall.
 TEST(Raycast, NearObjectBeforeFarWallAcrossTheNearPlane) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   const Eigen::Vector3d c(0.02, 0.01, 0.45);
   const double r = 0.2;  // nearest surface point at 0.25 m; its blocks reach in front of min_depth_m = 0.2
   const Eigen::Vector3d n(0.0, 0.0, -1.0);
   const double offset = -2.5;  // the plane z = 2.5 facing the camera
   auto sphere = [&](const Eigen::Vector3d& p) { return (p - c).norm() - r; };
   auto plane = [&](const Eigen::Vector3d& p) { return n.dot(p) - offset; };
-  fill(grid, [&](const Eigen::Vector3d& p) { return std::min(sphere(p), plane(p)); }, {-2.5, -2.0, 0.0},
+  fill_raycast_sdf(grid, [&](const Eigen::Vector3d& p) { return std::min(sphere(p), plane(p)); }, {-2.5, -2.0, 0.0},
        {2.5, 2.0, 2.7});
   const SE3 T;  // camera at the origin looking along +z
   const RaycastResult out = raycast(grid, kCamera, T);
@@ -235,9 +235,9 @@ TEST(Raycast, NearObjectBeforeFarWallAcrossTheNearPlane) {
 
 // Pixels are independent: one thread or many give bit-identical images.
 TEST(Raycast, DeterministicAcrossThreadCounts) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   const Eigen::Vector3d c(0.0131, -0.0217, 0.0073);
-  fill(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.4; }, c.array() - 0.5, c.array() + 0.5);
+  fill_raycast_sdf(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.4; }, c.array() - 0.5, c.array() + 0.5);
   const SE3 T = datasets::look_at({1.1, 0.3, -0.6}, c);
   const RaycastResult many = raycast(grid, kCamera, T);
   RaycastResult one;
@@ -258,7 +258,7 @@ TEST(Raycast, DeterministicAcrossThreadCounts) {
 }
 
 TEST(Raycast, EmptyGridAndBadInput) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   RaycastResult out = raycast(grid, kCamera, SE3());
   EXPECT_EQ(out.hit_count, 0);
   for (const auto& v : out.vertices.pixels()) EXPECT_EQ(v.w, 0.0f);
@@ -317,7 +317,7 @@ HintComparison compare_hint(const RaycastResult& plain, const RaycastResult& hin
 // chosen to straddle block borders (into missing blocks too), in sequences that hit the cell cache, and with a
 // minimum weight that makes part of the voxels unobserved.
 TEST(RaycastSampler, FastPathsMatchTheGeneralPathsBitForBit) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   fuse_noisy_room(grid, 12, 3);
   const auto blocks = grid.blocks();
   ASSERT_GT(blocks.size(), 100u);
@@ -382,7 +382,7 @@ TEST(Raycast, DepthHintOnTheSphereMatchesTheFullMarch) {
   const PinholeCamera camera = kCamera;
   const Eigen::Vector3d c = datasets::kSphereCentre;
   const double r = datasets::kSphereRadius_m;
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   const std::vector<SE3> poses = datasets::ring_poses(c, 1.4, 8);
   DepthImage last;
   for (const SE3& T : poses) {
@@ -413,7 +413,7 @@ TEST(Raycast, DepthHintOnTheSphereMatchesTheFullMarch) {
 // hinted one hits 53 more (RMS 0.8 cm from the truth), at the fringe of the observed volume (the image border,
 // depth edges) where the full march met unobserved samples just before the surface.
 TEST(Raycast, DepthHintOnTheNoisyRoomMatchesTheFullMarch) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   const datasets::SyntheticFrame f = fuse_noisy_room(grid, 40, 4);
   RaycastOptions opts;
   opts.shade = false;
@@ -454,9 +454,9 @@ TEST(Raycast, DepthHintOnTheNoisyRoomMatchesTheFullMarch) {
 // A hint of zeros (no pixel hinted; negative, NaN and infinite values count as zero) is exactly no hint; a hint
 // of the wrong size is rejected.
 TEST(Raycast, DepthHintOfZerosIsNoHintAndWrongSizeThrows) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   const Eigen::Vector3d c(0.0131, -0.0217, 0.0073);
-  fill(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.4; }, c.array() - 0.5, c.array() + 0.5);
+  fill_raycast_sdf(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.4; }, c.array() - 0.5, c.array() + 0.5);
   const SE3 T = datasets::look_at({1.1, 0.3, -0.6}, c);
   const RaycastResult plain = raycast(grid, kCamera, T);
   DepthImage zeros(kCamera.width, kCamera.height, 0.0f);
@@ -490,9 +490,9 @@ TEST(Raycast, DepthHintOfZerosIsNoHintAndWrongSizeThrows) {
 
 // color = false (the SLAM pipeline's tracking raycast) leaves the colour image black and changes nothing else.
 TEST(Raycast, WithoutColourTheGeometryIsUnchanged) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   const Eigen::Vector3d c(0.0131, -0.0217, 0.0073);
-  fill(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.4; }, c.array() - 0.5, c.array() + 0.5);
+  fill_raycast_sdf(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - 0.4; }, c.array() - 0.5, c.array() + 0.5);
   const SE3 T = datasets::look_at({1.1, 0.3, -0.6}, c);
   const RaycastResult with = raycast(grid, kCamera, T);
   RaycastOptions opts;
@@ -519,7 +519,7 @@ TEST(Raycast, WithoutColourTheGeometryIsUnchanged) {
 // 2.5 m range the set is a fraction of the map (measured: 1 208-1 269 of 3 537 blocks), and without the reach
 // margin (the bounding spheres alone) this test fails.
 TEST(Raycast, BlocksInViewHoldEveryBlockARayReads) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   fuse_noisy_room(grid, 40, 4);
   datasets::SyntheticOptions o;
   o.preset = "room";
@@ -573,7 +573,7 @@ TEST(Raycast, BlocksInViewHoldEveryBlockARayReads) {
 TEST(Raycast, SkippingBlocksWithoutSurfaceKeepsTheHits) {
   {
     const Eigen::Vector3d c = datasets::kSphereCentre;
-    VoxelBlockGrid grid(params_1cm());
+    VoxelBlockGrid grid(raycast_params_1cm());
     const std::vector<SE3> poses = datasets::ring_poses(c, 1.4, 8);
     for (const SE3& T : poses)
       integrate(grid, testing::render_sphere_depth(kCamera, T, c, datasets::kSphereRadius_m), ColorImage(), kCamera,
@@ -602,7 +602,7 @@ TEST(Raycast, SkippingBlocksWithoutSurfaceKeepsTheHits) {
                               << skipped.depth(x, y);
     }
   }
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   const datasets::SyntheticFrame f = fuse_noisy_room(grid, 40, 4);
   RaycastOptions opts;
   opts.shade = false;
@@ -687,10 +687,10 @@ TEST(ForwardProjectDepth, ZBufferOfTheMovedVertices) {
 // tan(theta) < 3. And the moved points cover nearly all of the new view's surface (the motion changes the scale
 // by under 3 %, so few pixels receive no point).
 TEST(ForwardProjectDepth, PredictsTheRaycastAtANearbyPose) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   const Eigen::Vector3d c(0.0131, -0.0217, 0.0073);
   const double r = 0.4;
-  fill(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - r; }, c.array() - 0.5, c.array() + 0.5);
+  fill_raycast_sdf(grid, [&](const Eigen::Vector3d& p) { return (p - c).norm() - r; }, c.array() - 0.5, c.array() + 0.5);
   const SE3 A = datasets::look_at({1.3, -0.4, 0.5}, c);
   const SE3 B = A * SE3(Eigen::Quaterniond(Eigen::AngleAxisd(3.0 * M_PI / 180.0, Eigen::Vector3d(0.3, 1.0, 0.2).normalized())),
                         Eigen::Vector3d(0.02, -0.01, 0.02));
@@ -721,7 +721,7 @@ TEST(ForwardProjectDepth, PredictsTheRaycastAtANearbyPose) {
 // The sampled tracking raycast (fusion/raycast_sampled.h) equals the full one at every cast pixel, bit for bit, with
 // and without a depth hint, and reads as a miss elsewhere; the mask grows by a square window.
 TEST(RaycastSampled, EqualsTheFullRaycastAtTheCastPixels) {
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(raycast_params_1cm());
   const datasets::SyntheticFrame f = fuse_noisy_room(grid, 9, 4);
   Image<std::uint8_t> rays(kCamera.width, kCamera.height, 0);
   std::mt19937 rng(7);

@@ -20,28 +20,28 @@ struct Room {
   ColorImage full;
 };
 
-const Room& room() {
+const Room& sparse_render_room() {
   static Room r = [] {
-    Room room;
+    Room sparse_render_room;
     datasets::SyntheticOptions o;
     o.preset = "room";
     o.frames = 12;
-    o.camera = room.camera;
+    o.camera = sparse_render_room.camera;
     const datasets::SyntheticSequence seq(o);
     for (int i = 0; i < 12; i += 3) {
       const datasets::SyntheticFrame f = seq.frame(i);
-      integrate(room.grid, f.depth, f.color, seq.camera(), f.T_world_camera);
-      room.T_world_camera = f.T_world_camera;
+      integrate(sparse_render_room.grid, f.depth, f.color, seq.camera(), f.T_world_camera);
+      sparse_render_room.T_world_camera = f.T_world_camera;
     }
     RaycastOptions opts;
-    room.full = raycast(room.grid, room.camera, room.T_world_camera, opts).shaded;
-    return room;
+    sparse_render_room.full = raycast(sparse_render_room.grid, sparse_render_room.camera, sparse_render_room.T_world_camera, opts).shaded;
+    return sparse_render_room;
   }();
   return r;
 }
 
 TEST(SparseRender, EveryRayIsTheFullRender) {
-  const Room& r = room();
+  const Room& r = sparse_render_room();
   const Image<std::uint8_t> all(r.camera.width, r.camera.height, 1);
   for (Reconstruction m : {Reconstruction::push_pull, Reconstruction::mesh}) {
     const SparseRender s = render_masked(r.grid, r.camera, r.T_world_camera, RaycastOptions{}, all, m);
@@ -55,7 +55,7 @@ TEST(SparseRender, EveryRayIsTheFullRender) {
 }
 
 TEST(SparseRender, FewerRaysGiveAWholeImage) {
-  const Room& r = room();
+  const Room& r = sparse_render_room();
   const int w = r.camera.width, h = r.camera.height;
   Image<std::uint8_t> mask(w, h);
   mask.pixels() = halton_mask(w, h, 0.3);
@@ -80,7 +80,7 @@ TEST(SparseRender, FewerRaysGiveAWholeImage) {
 }
 
 TEST(SparseRender, CoNUSViewThroughASamplingMap) {
-  const Room& r = room();
+  const Room& r = sparse_render_room();
   // Rates 1 everywhere: the CoNUS image is the full render.
   const SparseRender id = render_conus(r.grid, r.camera, r.T_world_camera, RaycastOptions{},
                                        SamplingMap::identity(r.camera.width, r.camera.height, 8, 6));
@@ -104,7 +104,7 @@ TEST(SparseRender, CoNUSViewThroughASamplingMap) {
 }
 
 TEST(SparseRender, BadArgumentsThrow) {
-  const Room& r = room();
+  const Room& r = sparse_render_room();
   EXPECT_THROW(render_masked(r.grid, r.camera, r.T_world_camera, RaycastOptions{}, Image<std::uint8_t>(4, 4, 1),
                              Reconstruction::push_pull),
                Error);

@@ -11,7 +11,7 @@
 namespace hf::fusion {
 namespace {
 
-VolumeParams params_1cm() {
+VolumeParams streaming_params_1cm() {
   VolumeParams p;
   p.voxel_m = 0.01;
   p.capacity_blocks = 1 << 15;
@@ -40,7 +40,7 @@ bool same_bytes(const VoxelBlock& a, const VoxelBlock& b) {
 
 TEST(Streaming, OutAndBackIsBitIdentical) {
   const auto seq = sphere_sequence(6);
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(streaming_params_1cm());
   integrate_frames(grid, seq, 0, seq.size());
   const std::string before = serialize_volume(grid);
   const size_t blocks = grid.block_count();
@@ -90,10 +90,10 @@ TEST(Streaming, OutAndBackIsBitIdentical) {
 // frame touches come back before they are updated, never duplicated as fresh empty blocks.
 TEST(Streaming, IntegrateBringsStoredBlocksBack) {
   const auto seq = sphere_sequence(8);
-  VoxelBlockGrid reference(params_1cm());
+  VoxelBlockGrid reference(streaming_params_1cm());
   integrate_frames(reference, seq, 0, seq.size());
 
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(streaming_params_1cm());
   BlockStore store;
   integrate_frames(grid, seq, 0, 4);
   const size_t parked = stream_out(grid, store, Eigen::Vector3d(100, 0, 0), 1.0);
@@ -109,7 +109,7 @@ TEST(Streaming, IntegrateBringsStoredBlocksBack) {
 
 TEST(Streaming, BudgetKeepsNearestBlocks) {
   const auto seq = sphere_sequence(4);
-  VoxelBlockGrid grid(params_1cm());
+  VoxelBlockGrid grid(streaming_params_1cm());
   integrate_frames(grid, seq, 0, seq.size());
   const size_t blocks = grid.block_count();
   BlockStore store;
@@ -128,7 +128,7 @@ TEST(Streaming, BudgetKeepsNearestBlocks) {
 }
 
 TEST(Streaming, StreamInBeyondCapacityThrowsAndKeepsBlocks) {
-  VolumeParams p = params_1cm();
+  VolumeParams p = streaming_params_1cm();
   p.capacity_blocks = 4;
   VoxelBlockGrid grid(p);
   BlockStore store;

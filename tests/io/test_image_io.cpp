@@ -14,36 +14,13 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/error.h"
+#include "tests/io/test_dataset_util.h"
 
 namespace fs = std::filesystem;
 
-namespace {
-
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& tag) {
-    static int counter = 0;
-    path = fs::temp_directory_path() / ("hf_test_" + tag + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string operator/(const std::string& name) const { return (path / name).string(); }
-};
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const hf::Error& e) {
-    return e.what();
-  }
-  return "";
-}
-
-}  // namespace
+// The dataset tests' self-removing folder and error helper (one definition for every io test).
+using hf::test::error_of;
+using hf::test::TempDir;
 
 TEST(ImageIo, DepthPngRoundTripWithinHalfAQuantum) {
   TempDir dir("depth_rt");

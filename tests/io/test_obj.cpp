@@ -17,11 +17,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string temp_path(const std::string& name) {
+std::string obj_temp_path(const std::string& name) {
   return (fs::temp_directory_path() / ("hf_test_obj_" + std::to_string(::getpid()) + "_" + name)).string();
 }
 
-TriangleMesh make_mesh(bool normals, bool colors, int n = 30) {
+TriangleMesh obj_make_mesh(bool normals, bool colors, int n = 30) {
   TriangleMesh m;
   for (int i = 0; i < n; ++i) {
     const float t = static_cast<float>(i);
@@ -33,7 +33,7 @@ TriangleMesh make_mesh(bool normals, bool colors, int n = 30) {
   return m;
 }
 
-bool same_bits(const std::vector<Eigen::Vector3f>& a, const std::vector<Eigen::Vector3f>& b) {
+bool obj_same_bits(const std::vector<Eigen::Vector3f>& a, const std::vector<Eigen::Vector3f>& b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); ++i)
     for (int k = 0; k < 3; ++k)
@@ -45,12 +45,12 @@ class ObjRoundTrip : public ::testing::TestWithParam<std::tuple<bool, bool>> {};
 
 TEST_P(ObjRoundTrip, IsBitExact) {
   const auto [normals, colors] = GetParam();
-  const TriangleMesh m = make_mesh(normals, colors);
-  const std::string path = temp_path("rt.obj");
+  const TriangleMesh m = obj_make_mesh(normals, colors);
+  const std::string path = obj_temp_path("rt.obj");
   write_obj(path, m);
   const TriangleMesh back = read_obj(path);
-  EXPECT_TRUE(same_bits(m.vertices, back.vertices));
-  EXPECT_TRUE(same_bits(m.normals, back.normals));
+  EXPECT_TRUE(obj_same_bits(m.vertices, back.vertices));
+  EXPECT_TRUE(obj_same_bits(m.normals, back.normals));
   EXPECT_EQ(m.colors, back.colors);
   EXPECT_EQ(m.triangles, back.triangles);
   fs::remove(path);
@@ -69,9 +69,9 @@ TEST(ObjWrite, Layout) {
 }
 
 TEST(ObjWrite, InvalidMeshIsRefused) {
-  TriangleMesh m = make_mesh(false, false, 4);
+  TriangleMesh m = obj_make_mesh(false, false, 4);
   m.triangles.emplace_back(0, -1, 2);
-  const std::string path = temp_path("bad.obj");
+  const std::string path = obj_temp_path("bad.obj");
   EXPECT_THROW(write_obj(path, m), Error);
   EXPECT_FALSE(fs::exists(path));
 }
@@ -118,12 +118,12 @@ TEST(ObjRead, ForwardReferencesAreCheckedAtTheEnd) {
   EXPECT_EQ(m.triangles.size(), 1u);
 }
 
-struct BadCase {
+struct ObjBadCase {
   std::string text, expected;
 };
 
 TEST(ObjRead, MalformedInputGivesOneClearParseError) {
-  const std::vector<BadCase> cases = {
+  const std::vector<ObjBadCase> cases = {
       {"v 0 0\n", "bad.obj:1: expected 'v x y z [w]' or 'v x y z r g b', got 2 numbers"},
       {"v 0 0 0\nv 0 zero 0\n", "bad.obj:2: expected a number for y, got 'zero'"},
       {"v 0 0 nan\n", "bad.obj:1: expected a finite float for z, got 'nan'"},
@@ -139,7 +139,7 @@ TEST(ObjRead, MalformedInputGivesOneClearParseError) {
       {"v 0 0 0 1 0 0\nv 1 0 0\n", "bad.obj:2: expected colours 'v x y z r g b' as on the first vertex (line 1)"},
       {"v 0 0 0\nv 1 0 0 1 0 0\n", "bad.obj:2: expected no colours as on the first vertex (line 1)"},
   };
-  for (const BadCase& c : cases) {
+  for (const ObjBadCase& c : cases) {
     SCOPED_TRACE(c.text);
     try {
       parse_obj(c.text, "bad.obj");
@@ -149,7 +149,7 @@ TEST(ObjRead, MalformedInputGivesOneClearParseError) {
           << "  message: " << e.what() << "\n  expected to contain: " << c.expected;
     }
   }
-  EXPECT_THROW(read_obj(temp_path("missing.obj")), Error);
+  EXPECT_THROW(read_obj(obj_temp_path("missing.obj")), Error);
 }
 
 // Real head meshes (PROVENANCE.md gives the counts and that Max Planck and Nefertiti are closed manifolds).

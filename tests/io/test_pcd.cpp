@@ -17,11 +17,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string temp_path(const std::string& name) {
+std::string pcd_temp_path(const std::string& name) {
   return (fs::temp_directory_path() / ("hf_test_pcd_" + std::to_string(::getpid()) + "_" + name)).string();
 }
 
-bool same_bits(const std::vector<Eigen::Vector3f>& a, const std::vector<Eigen::Vector3f>& b) {
+bool pcd_same_bits(const std::vector<Eigen::Vector3f>& a, const std::vector<Eigen::Vector3f>& b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); ++i)
     for (int k = 0; k < 3; ++k)
@@ -40,11 +40,11 @@ TEST_P(PcdRoundTrip, IsBitExactAndKeepsOnlyTheAttributesWritten) {
     if (normals) c.normals.emplace_back(Eigen::Vector3f(1.0f / 3.0f, t / 7.0f, -0.3f).normalized());
     if (colors) c.colors.push_back(Rgb8{std::uint8_t(i * 37), std::uint8_t(255 - i), std::uint8_t(i * 101 + 3)});
   }
-  const std::string path = temp_path("rt.pcd");
+  const std::string path = pcd_temp_path("rt.pcd");
   write_pcd(path, c);
   const PointCloud back = read_pcd(path);
-  EXPECT_TRUE(same_bits(c.positions, back.positions));
-  EXPECT_TRUE(same_bits(c.normals, back.normals));
+  EXPECT_TRUE(pcd_same_bits(c.positions, back.positions));
+  EXPECT_TRUE(pcd_same_bits(c.normals, back.normals));
   EXPECT_EQ(c.colors, back.colors);
   std::ifstream in(path);
   std::string header((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -55,14 +55,14 @@ TEST_P(PcdRoundTrip, IsBitExactAndKeepsOnlyTheAttributesWritten) {
 INSTANTIATE_TEST_SUITE_P(AllCombinations, PcdRoundTrip, ::testing::Combine(::testing::Bool(), ::testing::Bool()));
 
 TEST(Pcd, EmptyCloudRoundTrips) {
-  const std::string path = temp_path("empty.pcd");
+  const std::string path = pcd_temp_path("empty.pcd");
   write_pcd(path, PointCloud{});
   EXPECT_EQ(read_pcd(path).size(), 0u);
   fs::remove(path);
 }
 
 TEST(Pcd, AsciiFileWithNanPointsDropsThem) {
-  const std::string path = temp_path("nan.pcd");
+  const std::string path = pcd_temp_path("nan.pcd");
   std::ofstream(path) << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F U\nCOUNT 1 1 1 1\n"
                          "WIDTH 3\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA ascii\n"
                          "1 2 3 16711680\nnan nan nan 0\n4 5 6 255\n";
@@ -77,14 +77,14 @@ TEST(Pcd, AsciiFileWithNanPointsDropsThem) {
 }
 
 TEST(Pcd, ErrorsNameTheFile) {
-  const std::string missing = temp_path("missing.pcd");
+  const std::string missing = pcd_temp_path("missing.pcd");
   try {
     read_pcd(missing);
     FAIL();
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()), missing + ": cannot read PCD file (No such file or directory)");
   }
-  const std::string garbage = temp_path("garbage.pcd");
+  const std::string garbage = pcd_temp_path("garbage.pcd");
   const std::string head = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 3\nHEIGHT 1\n";
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"this is not a point cloud\n", ":1: expected a PCD header keyword"},
@@ -108,7 +108,7 @@ TEST(Pcd, ErrorsNameTheFile) {
   PointCloud bad;
   bad.positions = {{0, 0, 0}};
   bad.colors = {{1, 2, 3}, {4, 5, 6}};
-  const std::string out = temp_path("bad.pcd");
+  const std::string out = pcd_temp_path("bad.pcd");
   EXPECT_THROW(write_pcd(out, bad), Error);
   EXPECT_FALSE(fs::exists(out));
 }

@@ -23,11 +23,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string temp_path(const std::string& name) {
+std::string ply_temp_path(const std::string& name) {
   return (fs::temp_directory_path() / ("hf_test_ply_" + std::to_string(::getpid()) + "_" + name)).string();
 }
 
-std::string slurp(const std::string& path) {
+std::string ply_slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
@@ -45,7 +45,7 @@ float awkward(int i) {
   return i < 12 ? base : base * (1.0f - static_cast<float>(i % 37) * 0.011f);  // stays finite
 }
 
-TriangleMesh make_mesh(bool normals, bool colors, bool faces, int n = 40) {
+TriangleMesh ply_make_mesh(bool normals, bool colors, bool faces, int n = 40) {
   TriangleMesh m;
   for (int i = 0; i < n; ++i) {
     m.vertices.emplace_back(awkward(3 * i), awkward(3 * i + 1), awkward(3 * i + 2));
@@ -57,7 +57,7 @@ TriangleMesh make_mesh(bool normals, bool colors, bool faces, int n = 40) {
   return m;
 }
 
-bool same_bits(const std::vector<Eigen::Vector3f>& a, const std::vector<Eigen::Vector3f>& b) {
+bool ply_same_bits(const std::vector<Eigen::Vector3f>& a, const std::vector<Eigen::Vector3f>& b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); ++i)
     for (int k = 0; k < 3; ++k)
@@ -66,8 +66,8 @@ bool same_bits(const std::vector<Eigen::Vector3f>& a, const std::vector<Eigen::V
 }
 
 void expect_identical(const TriangleMesh& a, const TriangleMesh& b) {
-  EXPECT_TRUE(same_bits(a.vertices, b.vertices));
-  EXPECT_TRUE(same_bits(a.normals, b.normals));
+  EXPECT_TRUE(ply_same_bits(a.vertices, b.vertices));
+  EXPECT_TRUE(ply_same_bits(a.normals, b.normals));
   EXPECT_EQ(a.colors, b.colors);
   EXPECT_EQ(a.triangles, b.triangles);
 }
@@ -80,13 +80,13 @@ class PlyRoundTrip : public ::testing::TestWithParam<RoundTripParam> {};
 
 TEST_P(PlyRoundTrip, MeshIsBitExact) {
   const auto [format, normals, colors, faces] = GetParam();
-  const TriangleMesh mesh = make_mesh(normals, colors, faces);
-  const std::string path = temp_path("roundtrip.ply");
+  const TriangleMesh mesh = ply_make_mesh(normals, colors, faces);
+  const std::string path = ply_temp_path("roundtrip.ply");
   write_ply(path, mesh, {format, "line one\nline two"});
   const TriangleMesh back = read_ply_mesh(path);
   expect_identical(mesh, back);
   // The string form is exactly what was written.
-  EXPECT_EQ(slurp(path), format_ply(mesh, {format, "line one\nline two"}));
+  EXPECT_EQ(ply_slurp(path), format_ply(mesh, {format, "line one\nline two"}));
   fs::remove(path);
 }
 
@@ -95,15 +95,15 @@ class PlyCloudRoundTrip : public ::testing::TestWithParam<CloudParam> {};
 
 TEST_P(PlyCloudRoundTrip, IsBitExact) {
   const auto [format, normals, colors] = GetParam();
-  const TriangleMesh m = make_mesh(normals, colors, false);
+  const TriangleMesh m = ply_make_mesh(normals, colors, false);
   PointCloud cloud{m.vertices, m.normals, m.colors};
-  const std::string path = temp_path("cloud.ply");
+  const std::string path = ply_temp_path("cloud.ply");
   write_ply(path, cloud, {format, ""});
   const PointCloud back = read_ply_point_cloud(path);
-  EXPECT_TRUE(same_bits(cloud.positions, back.positions));
-  EXPECT_TRUE(same_bits(cloud.normals, back.normals));
+  EXPECT_TRUE(ply_same_bits(cloud.positions, back.positions));
+  EXPECT_TRUE(ply_same_bits(cloud.normals, back.normals));
   EXPECT_EQ(cloud.colors, back.colors);
-  EXPECT_EQ(slurp(path).find("element face"), std::string::npos);
+  EXPECT_EQ(ply_slurp(path).find("element face"), std::string::npos);
   fs::remove(path);
 }
 
@@ -117,7 +117,7 @@ INSTANTIATE_TEST_SUITE_P(AllCombinations, PlyCloudRoundTrip,
                                             ::testing::Bool(), ::testing::Bool()));
 
 TEST(PlyWrite, DefaultIsBinaryLittleEndianWithDocumentedLayout) {
-  const TriangleMesh mesh = make_mesh(true, true, true, 4);
+  const TriangleMesh mesh = ply_make_mesh(true, true, true, 4);
   const std::string bytes = format_ply(mesh);
   const std::string header =
       "ply\nformat binary_little_endian 1.0\ncomment written by hashfusion\nelement vertex 4\n"
@@ -141,9 +141,9 @@ TEST(PlyWrite, EmptyMeshRoundTrips) {
 }
 
 TEST(PlyWrite, InvalidMeshIsRefusedAndExistingFileKept) {
-  const std::string path = temp_path("keep.ply");
+  const std::string path = ply_temp_path("keep.ply");
   put(path, "previous contents");
-  TriangleMesh bad = make_mesh(false, false, true, 5);
+  TriangleMesh bad = ply_make_mesh(false, false, true, 5);
   bad.triangles.emplace_back(0, 1, 5);
   try {
     write_ply(path, bad);
@@ -151,20 +151,20 @@ TEST(PlyWrite, InvalidMeshIsRefusedAndExistingFileKept) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("triangle 3 index 5 is outside [0, 5)"), std::string::npos) << e.what();
   }
-  TriangleMesh nan_mesh = make_mesh(false, false, false, 3);
+  TriangleMesh nan_mesh = ply_make_mesh(false, false, false, 3);
   nan_mesh.vertices[1].y() = std::nanf("");
   EXPECT_THROW(write_ply(path, nan_mesh), Error);
-  TriangleMesh short_normals = make_mesh(true, false, false, 3);
+  TriangleMesh short_normals = ply_make_mesh(true, false, false, 3);
   short_normals.normals.pop_back();
   EXPECT_THROW(write_ply(path, short_normals), Error);
-  EXPECT_EQ(slurp(path), "previous contents");
+  EXPECT_EQ(ply_slurp(path), "previous contents");
   fs::remove(path);
 }
 
 TEST(PlyWrite, UnwritableFolderThrowsNamingThePath) {
-  const std::string path = temp_path("no_such_folder") + "/out.ply";
+  const std::string path = ply_temp_path("no_such_folder") + "/out.ply";
   try {
-    write_ply(path, make_mesh(false, false, true, 3));
+    write_ply(path, ply_make_mesh(false, false, true, 3));
     FAIL() << "expected hf::Error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
@@ -341,7 +341,7 @@ TEST(PlyRead, ZeroCountElementsWithoutPropertiesCostNothing) {
 // ---------------------------------------------------------------------------------------------------------------
 // Malformed input: each case names the file, the line (or element index) and what was expected.
 
-struct BadCase {
+struct PlyBadCase {
   const char* what;
   std::string bytes;
   std::string expected;  // substring of what()
@@ -356,7 +356,7 @@ std::string le_body(std::initializer_list<float> values) {
   return s;
 }
 
-std::vector<BadCase> bad_cases() {
+std::vector<PlyBadCase> bad_cases() {
   const std::string ascii3 = "ply\nformat ascii 1.0\nelement vertex 3\n" + kXyz;
   const std::string ascii1 = "ply\nformat ascii 1.0\nelement vertex 1\n" + kXyz;
   const std::string bin_list2 = "ply\nformat binary_little_endian 1.0\nelement vertex 2\n" + kXyz + "property list uchar float extra\n";
@@ -433,7 +433,7 @@ std::vector<BadCase> bad_cases() {
 }
 
 TEST(PlyRead, MalformedInputGivesOneClearParseError) {
-  for (const BadCase& c : bad_cases()) {
+  for (const PlyBadCase& c : bad_cases()) {
     SCOPED_TRACE(c.what);
     try {
       parse_ply_mesh(c.bytes, "bad.ply");
@@ -447,7 +447,7 @@ TEST(PlyRead, MalformedInputGivesOneClearParseError) {
 }
 
 TEST(PlyRead, ErrorsFromFilesNameThePath) {
-  const std::string path = temp_path("broken.ply");
+  const std::string path = ply_temp_path("broken.ply");
   put(path, "ply\nformat ascii 1.0\nelement vertex 1\n" + kXyz + "end_header\n0 zero 0\n");
   try {
     read_ply_mesh(path);
@@ -466,7 +466,7 @@ TEST(PlyRead, ErrorsFromFilesNameThePath) {
 }
 
 TEST(PlyRead, EveryTruncationOfABinaryFileFailsCleanly) {
-  const std::string full = format_ply(make_mesh(true, true, true, 6));
+  const std::string full = format_ply(ply_make_mesh(true, true, true, 6));
   const size_t header_end = full.find("end_header\n") + 11;
   for (size_t n = 0; n < full.size(); ++n) {
     try {
@@ -485,7 +485,7 @@ TEST(PlyRead, EveryTruncationOfABinaryFileFailsCleanly) {
 }
 
 TEST(PlyRead, EveryTruncationOfAnAsciiFileFailsCleanly) {
-  const std::string full = format_ply(make_mesh(true, true, true, 6), {PlyFormat::ascii, ""});
+  const std::string full = format_ply(ply_make_mesh(true, true, true, 6), {PlyFormat::ascii, ""});
   const size_t last_line = full.rfind('\n', full.size() - 2) + 1;
   for (size_t n = 0; n < full.size(); ++n) {
     try {

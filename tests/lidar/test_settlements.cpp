@@ -21,7 +21,7 @@ CellRaster raster_of(const SyntheticSettlements& scene) {
   return raster;
 }
 
-BuiltUpOptions options_for(const SyntheticSettlements& scene, double t) {
+BuiltUpOptions settlements_options_for(const SyntheticSettlements& scene, double t) {
   BuiltUpOptions o;
   o.cell_m = scene.grid.cell_m;
   o.t_s = t;
@@ -34,7 +34,7 @@ TEST(SyntheticSettlements, EveryClassExactAtTheGeneratorsT) {
   ASSERT_EQ(scene.buildings, 1 + 9 + 1 + 25 + 49);
   const CellRaster raster = raster_of(scene);
   EXPECT_EQ(raster.points, scene.points.size());
-  const BuiltUp b = classify_built_up(raster, options_for(scene, scene.t_s));
+  const BuiltUp b = classify_built_up(raster, settlements_options_for(scene, scene.t_s));
   EXPECT_EQ(b.s.pixels(), scene.footprints.pixels());
   EXPECT_EQ(b.buildings.count, scene.buildings);
   // Heights above the sloping ground: h = k + 1/4 cells, within the ground noise (2 cm, averaged) and the plane's
@@ -68,7 +68,7 @@ TEST(SyntheticSettlements, EveryClassExactAtTheGeneratorsT) {
 TEST(SyntheticSettlements, SensitivityPeaksAtTheGeneratorsT) {
   const SyntheticSettlements scene = synthetic_settlements({1.0, 7});
   const CellRaster raster = raster_of(scene);
-  BuiltUp b = classify_built_up(raster, options_for(scene, 0.5));
+  BuiltUp b = classify_built_up(raster, settlements_options_for(scene, 0.5));
   std::vector<double> f1;
   const std::vector<double> sweep = {0.5, 1.0, 1.5, 2.0, 3.0};  // Table 2's values
   for (double t : sweep) {
@@ -87,7 +87,7 @@ TEST(SyntheticSettlements, SensitivityPeaksAtTheGeneratorsT) {
 
 TEST(SyntheticSettlements, HalfMetreCellsGiveTheSameAnswer) {
   const SyntheticSettlements scene = synthetic_settlements({0.5, 3});
-  const BuiltUp b = classify_built_up(raster_of(scene), options_for(scene, 2.0));
+  const BuiltUp b = classify_built_up(raster_of(scene), settlements_options_for(scene, 2.0));
   EXPECT_DOUBLE_EQ(compare_classes(b.profile.classes, scene.classes).mean_f1, 1.0);
 }
 
@@ -129,7 +129,7 @@ TEST(SyntheticSettlements, ThroughALasFile) {
   EXPECT_EQ(grid, scene.grid);
   const CellRaster raster = rasterise_files({path}, grid, {});
   std::filesystem::remove_all(dir);
-  const BuiltUp b = classify_built_up(raster, options_for(scene, scene.t_s));
+  const BuiltUp b = classify_built_up(raster, settlements_options_for(scene, scene.t_s));
   EXPECT_DOUBLE_EQ(compare_classes(b.profile.classes, scene.classes).mean_f1, 1.0);
 }
 

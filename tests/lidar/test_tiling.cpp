@@ -13,7 +13,7 @@
 namespace hf::lidar {
 namespace {
 
-BuiltUpOptions options_for(const SyntheticSettlements& scene) {
+BuiltUpOptions tiling_options_for(const SyntheticSettlements& scene) {
   BuiltUpOptions o;
   o.cell_m = scene.grid.cell_m;
   o.t_s = scene.t_s;
@@ -35,7 +35,7 @@ std::vector<TileResult> run_all_tiles(const SyntheticSettlements& scene, const T
 
 TEST(Tiling, SplitRunsEqualTheSingleRun) {
   const SyntheticSettlements scene = synthetic_settlements({1.0, 21, 300, 0});  // stray points make extra hamlets
-  const BuiltUpOptions o = options_for(scene);
+  const BuiltUpOptions o = tiling_options_for(scene);
   CellRaster whole(scene.grid);
   whole.add(scene.points);
   const BuiltUpRaster single = built_up_raster(classify_built_up(whole, o), scene.grid);
@@ -62,7 +62,7 @@ TEST(Tiling, SplitRunsEqualTheSingleRun) {
 // statistics whatever the band height: one row at a time, bands that cut tile rows unevenly, one band per row of tiles.
 TEST(Tiling, StreamingFileMergeEqualsTheSingleRunInAnyBand) {
   const SyntheticSettlements scene = synthetic_settlements({1.0, 21, 300, 0});
-  const BuiltUpOptions o = options_for(scene);
+  const BuiltUpOptions o = tiling_options_for(scene);
   CellRaster whole(scene.grid);
   whole.add(scene.points);
   const BuiltUpRaster single = built_up_raster(classify_built_up(whole, o), scene.grid);
@@ -106,7 +106,7 @@ TEST(Tiling, StreamingFileMergeEqualsTheSingleRunInAnyBand) {
 
 TEST(Tiling, TileFilesRoundTripAndRejectCorruption) {
   const SyntheticSettlements scene = synthetic_settlements({1.0, 4});
-  const BuiltUpOptions o = options_for(scene);
+  const BuiltUpOptions o = tiling_options_for(scene);
   const TilePlan plan = plan_tiles(scene.grid, 3, 1, o, {10.0, 20.0});
   const auto tiles = run_all_tiles(scene, plan, o, {10.0, 20.0});
   const auto dir = std::filesystem::temp_directory_path() / ("hf_lidar_tiles_" + std::to_string(::getpid()));
@@ -151,7 +151,7 @@ TEST(Tiling, TileFilesRoundTripAndRejectCorruption) {
 
 TEST(Tiling, UnmetHaloAssumptionsAreReported) {
   const SyntheticSettlements scene = synthetic_settlements({1.0, 4});
-  const BuiltUpOptions o = options_for(scene);
+  const BuiltUpOptions o = tiling_options_for(scene);
   // Houses are up to 8.25 m tall: a 5 m limit must refuse, not guess.
   const TilePlan plan = plan_tiles(scene.grid, 2, 1, o, {5.0, 20.0});
   try {

@@ -15,7 +15,7 @@ namespace hf::photogrammetry {
 namespace {
 
 using testing::look_at;
-const std::string kShared = HF_SHARED_DIR;
+const std::string kDltShared = HF_SHARED_DIR;
 
 std::vector<Shot> ring_of_shots(int n, double radius, const Eigen::Vector3d& target) {
   std::vector<Shot> shots;
@@ -131,7 +131,7 @@ TEST(DltTriangulation, DegenerateGeometryGivesAStatusNotNaN) {
 }
 
 TEST(DltTriangulation, MiddleburyExactCamerasRecoverPointsFromTheirProjections) {
-  const std::string dir = kShared + "/data/photogrammetry_middlebury_templeRing19";
+  const std::string dir = kDltShared + "/data/photogrammetry_middlebury_templeRing19";
   if (!std::filesystem::exists(dir)) GTEST_SKIP() << dir << " not found (../shared absent)";
   const Network n = read_network(dir);
   const Eigen::Vector3d lo(-0.023121, -0.038009, -0.091940), hi(0.078626, 0.121636, -0.017395);
@@ -156,7 +156,7 @@ TEST(DltTriangulation, MiddleburyExactCamerasRecoverPointsFromTheirProjections) 
 }
 
 TEST(DltTriangulation, SceauxSparsePointsRetriangulateWithinTheSfmError) {
-  const std::string dir = kShared + "/data/photogrammetry_sceaux_castle";
+  const std::string dir = kDltShared + "/data/photogrammetry_sceaux_castle";
   if (!std::filesystem::exists(dir)) GTEST_SKIP() << dir << " not found (../shared absent)";
   const Network n = read_network(dir);
   // The dump has no 2D keypoints (PROVENANCE.md), so the observations are the points' projections into their

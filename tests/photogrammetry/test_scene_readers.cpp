@@ -20,7 +20,7 @@
 namespace hf::photogrammetry {
 namespace {
 
-const std::string kShared = HF_SHARED_DIR;
+const std::string kReadersShared = HF_SHARED_DIR;
 
 template <class F>
 std::string error_of(F f) {
@@ -206,7 +206,7 @@ TEST(Sketch, ParsesAndChecksStructure) {
 }
 
 TEST(SharedData, SceauxReadsTenPresentShotsAndTheSparseCloud) {
-  const std::string dir = kShared + "/data/photogrammetry_sceaux_castle";
+  const std::string dir = kReadersShared + "/data/photogrammetry_sceaux_castle";
   if (!std::filesystem::exists(dir)) GTEST_SKIP() << dir << " not found (../shared absent)";
   const Network n = read_network(dir);
   ASSERT_EQ(n.shots.size(), 11u);
@@ -230,7 +230,7 @@ TEST(SharedData, SceauxReadsTenPresentShotsAndTheSparseCloud) {
 }
 
 TEST(SharedData, MiddleburyReads47CamerasOf19Images) {
-  const std::string dir = kShared + "/data/photogrammetry_middlebury_templeRing19";
+  const std::string dir = kReadersShared + "/data/photogrammetry_middlebury_templeRing19";
   if (!std::filesystem::exists(dir)) GTEST_SKIP() << dir << " not found (../shared absent)";
   const Network n = read_network(dir);
   ASSERT_EQ(n.shots.size(), 47u);
@@ -352,7 +352,7 @@ TEST(SceneMvs, MalformedScenesFailWithTheByteNeverACrash) {
 }
 
 TEST(SharedData, SceauxSceneMvsEqualsItsTextDump) {
-  const std::string dir = kShared + "/data/photogrammetry_sceaux_castle";
+  const std::string dir = kReadersShared + "/data/photogrammetry_sceaux_castle";
   if (!std::filesystem::exists(dir)) GTEST_SKIP() << dir << " not found (../shared absent)";
   const Network binary = read_scene_mvs(dir + "/scene.mvs");
   const Network text = read_openmvs_text(dir);

@@ -16,7 +16,7 @@ namespace hf::photogrammetry {
 namespace {
 
 using testing::BoxBuilding;
-const std::string kShared = HF_SHARED_DIR;
+const std::string kSketchShared = HF_SHARED_DIR;
 constexpr double kNoise = 0.01;  // 1 cm cloud noise
 
 Network box_network() {
@@ -162,7 +162,7 @@ TEST(Guidance, DecisionTable) {
 }
 
 TEST(RansacPlanes, SceauxMainFacadesAreVerticalAndFaceTheCameras) {
-  const std::string dir = kShared + "/data/photogrammetry_sceaux_castle";
+  const std::string dir = kSketchShared + "/data/photogrammetry_sceaux_castle";
   if (!std::filesystem::exists(dir)) GTEST_SKIP() << dir << " not found (../shared absent)";
   const Network n = read_network(dir);
   RansacPlaneOptions o;

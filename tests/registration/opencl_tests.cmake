@@ -6,7 +6,7 @@ if(TARGET hf_registration_opencl)
   # The same binary with the ICD loader looking in an empty folder: no platform, so make_backend("opencl") must
   # fail with the documented message (NoPlatform.*).
   add_test(NAME registration_opencl_no_platform
-           COMMAND test_registration_opencl --gtest_filter=NoPlatform.*)
+           COMMAND $<TARGET_FILE:test_registration_opencl> --gtest_filter=NoPlatform.*)
   set_tests_properties(registration_opencl_no_platform PROPERTIES
     LABELS registration
     ENVIRONMENT "OCL_ICD_VENDORS=${CMAKE_CURRENT_BINARY_DIR}/no_opencl_vendors;OCL_ICD_FILENAMES="

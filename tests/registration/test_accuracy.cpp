@@ -28,7 +28,7 @@ std::unique_ptr<ReductionBackend> backend_or_null(const std::string& name, std::
   }
 }
 
-const test::FramePair& room_pair(bool noise) {
+const test::FramePair& accuracy_room_pair(bool noise) {
   // Noise-free data without the bilateral filter (it would only smooth creases); noisy data with it, as in use.
   static const test::FramePair clean = test::make_pair("room", 10, 11, false, 3, /*bilateral=*/false);
   static const test::FramePair noisy = test::make_pair("room", 10, 11, true, 3, /*bilateral=*/true);
@@ -55,7 +55,7 @@ TEST_P(RoomAccuracy, RecoversKnownMotionOnEveryBackend) {
   std::string why;
   if (!backend_or_null(backend, &why)) GTEST_SKIP() << backend << " backend unavailable here: " << why;
   for (const bool noise : {false, true}) {
-    const test::FramePair& pair = room_pair(noise);
+    const test::FramePair& pair = accuracy_room_pair(noise);
     const RegistrationResult r = align_on(method, backend, pair);
     test::expect_finite(r);
     const double et = test::translation_error_m(r.T_ref_cur, pair.T_ref_cur_true);
@@ -86,7 +86,7 @@ TEST_P(RoomAccuracy, SameAnswerAsTheCpuBackend) {
   if (backend == "cpu") GTEST_SKIP() << "the reference";
   std::string why;
   if (!backend_or_null(backend, &why)) GTEST_SKIP() << backend << " backend unavailable here: " << why;
-  const test::FramePair& pair = room_pair(true);
+  const test::FramePair& pair = accuracy_room_pair(true);
   const RegistrationResult ref = align_on(method, "cpu", pair);
   const RegistrationResult got = align_on(method, backend, pair);
   EXPECT_EQ(got.status, ref.status) << got.message;

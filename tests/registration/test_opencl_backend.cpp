@@ -152,7 +152,7 @@ struct FramePair {
   SE3 T_ref_cur_true;
 };
 
-const FramePair& room_pair() {
+const FramePair& opencl_room_pair() {
   static const FramePair pair = [] {
     datasets::SyntheticOptions options;
     options.preset = "room";
@@ -194,7 +194,7 @@ class BackendsAgree : public ::testing::TestWithParam<MethodCase> {};
 
 TEST_P(BackendsAgree, OnTheNormalEquationsAndTheSolvedStep) {
   HF_SKIP_WITHOUT_OPENCL();
-  const FramePair& pair = room_pair();
+  const FramePair& pair = opencl_room_pair();
   const auto& [name, robust] = GetParam();
   const std::string label = name + "/" + test::robust_name(robust);
   CpuReductionBackend cpu;
@@ -240,7 +240,7 @@ INSTANTIATE_TEST_SUITE_P(Registry, BackendsAgree,
 // combined's icp term: the same 1e-6 relative agreement.
 TEST(OpenClBackend, IcpDepthNoiseWeightingAgrees) {
   HF_SKIP_WITHOUT_OPENCL();
-  const FramePair& pair = room_pair();
+  const FramePair& pair = opencl_room_pair();
   CpuReductionBackend cpu;
   opencl::OpenClReductionBackend cl_backend;
   for (const char* name : {"icp", "combined"}) {
@@ -264,7 +264,7 @@ TEST(OpenClBackend, IcpDepthNoiseWeightingAgrees) {
 
 TEST(OpenClBackend, ReusesUploadedMapsWhileTheInputsVersionHolds) {
   HF_SKIP_WITHOUT_OPENCL();
-  const FramePair& pair = room_pair();
+  const FramePair& pair = opencl_room_pair();
   opencl::OpenClReductionBackend backend;
   test::MethodUnderTest method;
   ResidualProblem p = make_problem(pair, 1, "combined", RobustKernel::huber, pair.T_ref_cur_true, method);
@@ -298,7 +298,7 @@ TEST(OpenClBackend, ReusesUploadedMapsWhileTheInputsVersionHolds) {
 // version: the next iteration or a re-bound level with the same map reads the device copy it has.
 TEST(OpenClBackend, UploadsAKernelBufferOncePerVersion) {
   HF_SKIP_WITHOUT_OPENCL();
-  const FramePair& pair = room_pair();
+  const FramePair& pair = opencl_room_pair();
   test::MethodUnderTest method;
   ResidualProblem p = make_problem(pair, 1, "sdf", RobustKernel::huber, pair.T_ref_cur_true, method);
   ASSERT_NE(p.maps[HF_REG_IN_METHOD0].buffer, nullptr);
@@ -453,7 +453,7 @@ TEST(OpenClBackend, BindsTheDevicePyramidsMapsInsteadOfUploadingThem) {
 // depth-aware halving, back-projection, normals), so equal maps; level 0's copies are published for its images.
 TEST(DeviceFramePyramid, ModelPyramidMatchesTheCpus) {
   HF_SKIP_WITHOUT_OPENCL();
-  const FramePair& pair = room_pair();
+  const FramePair& pair = opencl_room_pair();
   const FramePyramidLevel& model = pair.ref.levels[0];
   opencl::DeviceFramePyramid device;
   const FramePyramid a = build_model_pyramid(model.vertices, model.normals, nullptr, model.camera, 3);
@@ -478,7 +478,7 @@ TEST(DeviceFramePyramid, ModelPyramidMatchesTheCpus) {
 // zero-sized buffer, and a frame without rows reduces to nothing on both.
 TEST(OpenClBackend, SdfOnEmptyInputGivesTheCpuOutcome) {
   HF_SKIP_WITHOUT_OPENCL();
-  const FramePair& pair = room_pair();
+  const FramePair& pair = opencl_room_pair();
   const PinholeCamera cam = pair.cur.levels[0].camera;
   const SE3 guess = SE3::exp((Vector6d() << 0.01, 0.0, 0.0, 0.02, 0.0, 0.0).finished());
   FramePyramidOptions po;
@@ -505,7 +505,7 @@ TEST(OpenClBackend, SdfOnEmptyInputGivesTheCpuOutcome) {
 
 TEST(OpenClBackend, MapsAMethodDoesNotReadMayBeNull) {
   HF_SKIP_WITHOUT_OPENCL();
-  const FramePair& pair = room_pair();
+  const FramePair& pair = opencl_room_pair();
   test::MethodUnderTest method;
   ResidualProblem p = make_problem(pair, 1, "icp", RobustKernel::none, pair.T_ref_cur_true, method);
   for (int slot : {HF_REG_IN_CUR_INTENSITY, HF_REG_IN_REF_INTENSITY, HF_REG_IN_REF_GRAD_X, HF_REG_IN_REF_GRAD_Y}) {
@@ -518,7 +518,7 @@ TEST(OpenClBackend, MapsAMethodDoesNotReadMayBeNull) {
 
 TEST(OpenClBackend, MalformedProblemIsAnError) {
   HF_SKIP_WITHOUT_OPENCL();
-  const FramePair& pair = room_pair();
+  const FramePair& pair = opencl_room_pair();
   test::MethodUnderTest method;
   ResidualProblem p = make_problem(pair, 1, "photometric", RobustKernel::none, pair.T_ref_cur_true, method);
   p.maps[HF_REG_IN_REF_GRAD_X] = {};

@@ -18,7 +18,7 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180.0;
 
-SE3 pose(const Eigen::Vector3d& t, double yaw_rad = 0.0) {
+SE3 eval_pose(const Eigen::Vector3d& t, double yaw_rad = 0.0) {
   return SE3(Eigen::Quaterniond(Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ())), t);
 }
 
@@ -168,8 +168,8 @@ TEST(Ate, KnownPerturbationsGiveHandComputedStatistics) {
   double stamp = 10.0;
   for (const auto& [g, s] : points) {
     for (double sign : {1.0, -1.0}) {
-      gt.push_back({stamp, pose(centre + sign * g)});
-      est_local.push_back({stamp, pose(centre + sign * (g + s * g.normalized()))});
+      gt.push_back({stamp, eval_pose(centre + sign * g)});
+      est_local.push_back({stamp, eval_pose(centre + sign * (g + s * g.normalized()))});
       stamp += 0.1;
     }
   }
@@ -252,7 +252,7 @@ Trajectory line(double v, double yaw_rate = 0.0, double duration_s = 3.0) {
   Trajectory out;
   for (int k = 0; k <= int(std::lround(duration_s * 30.0)); ++k) {
     const double t = k / 30.0;
-    out.push_back({50.0 + t, pose(Eigen::Vector3d(v * t, 0.0, 0.0), yaw_rate * t)});
+    out.push_back({50.0 + t, eval_pose(Eigen::Vector3d(v * t, 0.0, 0.0), yaw_rate * t)});
   }
   return out;
 }
@@ -334,7 +334,7 @@ TEST(Rpe, RejectsPairsWhoseGroundTruthIsBeyondTwiceTheMedianInterval) {
   Trajectory gt;
   for (int k = 0; k <= 300; ++k) {
     if (k >= 120 && k < 170) continue;
-    gt.push_back({50.0 + k * 0.01, pose(Eigen::Vector3d(0.5 * k * 0.01, 0.0, 0.0))});
+    gt.push_back({50.0 + k * 0.01, eval_pose(Eigen::Vector3d(0.5 * k * 0.01, 0.0, 0.0))});
   }
   const RpeResult r = evaluate_rpe(gt, line(0.5));
   EXPECT_NEAR(r.gt_max_time_difference_s, 0.02, 1e-9);

@@ -14,7 +14,7 @@
 namespace hf::slam {
 namespace {
 
-SE3 pose(double x_m, double yaw_deg = 0.0) {
+SE3 keyframes_pose(double x_m, double yaw_deg = 0.0) {
   return SE3(Eigen::Quaterniond(Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitY())),
              Eigen::Vector3d(x_m, 0.0, 0.0));
 }
@@ -66,14 +66,14 @@ TEST(KeyframeMap, SelectsByMotionAndFrameGap) {
   o.max_frames_between = 30;
   KeyframeMap map(o);
   const DepthImage d = noisy_depth(32, 24, 2);
-  EXPECT_TRUE(map.wants_keyframe(pose(0.0), 0));
-  map.add(0, 0.0, pose(0.0), Matrix6d::Identity(), d, {});
-  EXPECT_FALSE(map.wants_keyframe(pose(0.09), 5));
-  EXPECT_TRUE(map.wants_keyframe(pose(0.11), 5));
-  EXPECT_FALSE(map.wants_keyframe(pose(0.0, 9.0), 5));
-  EXPECT_TRUE(map.wants_keyframe(pose(0.0, 11.0), 5));
-  EXPECT_TRUE(map.wants_keyframe(pose(0.0), 30));
-  map.add(30, 1.0, pose(0.3), Matrix6d::Identity(), d, {});
+  EXPECT_TRUE(map.wants_keyframe(keyframes_pose(0.0), 0));
+  map.add(0, 0.0, keyframes_pose(0.0), Matrix6d::Identity(), d, {});
+  EXPECT_FALSE(map.wants_keyframe(keyframes_pose(0.09), 5));
+  EXPECT_TRUE(map.wants_keyframe(keyframes_pose(0.11), 5));
+  EXPECT_FALSE(map.wants_keyframe(keyframes_pose(0.0, 9.0), 5));
+  EXPECT_TRUE(map.wants_keyframe(keyframes_pose(0.0, 11.0), 5));
+  EXPECT_TRUE(map.wants_keyframe(keyframes_pose(0.0), 30));
+  map.add(30, 1.0, keyframes_pose(0.3), Matrix6d::Identity(), d, {});
   EXPECT_NEAR(map[1].path_m, 0.3, 1e-12);
   EXPECT_NEAR(map[1].T_previous_this.translation().x(), 0.3, 1e-12);
 }
@@ -82,11 +82,11 @@ TEST(KeyframeMap, BudgetDropsTheOldestImagesNeverTheNewest) {
   KeyframeOptions o;
   KeyframeMap probe(o);
   const DepthImage d = noisy_depth(64, 48, 3);
-  probe.add(0, 0.0, pose(0.0), Matrix6d::Identity(), d, {});
+  probe.add(0, 0.0, keyframes_pose(0.0), Matrix6d::Identity(), d, {});
   const double one_mb = double(probe.memory_bytes()) / (1024.0 * 1024.0);
   o.memory_budget_mb = 2.5 * one_mb;  // room for two keyframes' images
   KeyframeMap map(o);
-  for (int i = 0; i < 5; ++i) map.add(size_t(i), i, pose(0.2 * i), Matrix6d::Identity(), noisy_depth(64, 48, 3), {});
+  for (int i = 0; i < 5; ++i) map.add(size_t(i), i, keyframes_pose(0.2 * i), Matrix6d::Identity(), noisy_depth(64, 48, 3), {});
   EXPECT_FALSE(map.has_images(0));
   EXPECT_FALSE(map.has_images(2));
   EXPECT_TRUE(map.has_images(3));
@@ -95,7 +95,7 @@ TEST(KeyframeMap, BudgetDropsTheOldestImagesNeverTheNewest) {
   EXPECT_LE(double(map.memory_bytes()), o.memory_budget_mb * 1024.0 * 1024.0);
   o.memory_budget_mb = 0.0;  // even with no budget the newest keeps its images
   KeyframeMap none(o);
-  none.add(0, 0.0, pose(0.0), Matrix6d::Identity(), d, {});
+  none.add(0, 0.0, keyframes_pose(0.0), Matrix6d::Identity(), d, {});
   EXPECT_TRUE(none.has_images(0));
 }
 
@@ -105,7 +105,7 @@ TEST(LoopCandidates, NeedGapPathAndProximity) {
   // A lap: out 1.5 m along x and back; keyframe 10 is back near keyframe 0.
   for (int i = 0; i <= 10; ++i) {
     const double x = i <= 5 ? 0.3 * i : 0.3 * (10 - i);
-    map.add(size_t(i * 10), i, pose(x), Matrix6d::Identity(), d, {});
+    map.add(size_t(i * 10), i, keyframes_pose(x), Matrix6d::Identity(), d, {});
   }
   ASSERT_NEAR(map[10].path_m, 3.0, 1e-9);
   LoopClosureOptions o;
@@ -122,10 +122,10 @@ TEST(LoopCandidates, NeedGapPathAndProximity) {
 TEST(KeyframeGraph, OdometryEdgesKeepTheTrackedMeasurementAndAreWellPosed) {
   KeyframeMap map;
   const DepthImage d = noisy_depth(16, 12, 5);
-  map.add(0, 0.0, pose(0.0), Matrix6d::Zero(), d, {});
-  map.add(10, 1.0, pose(0.2), 1e6 * Matrix6d::Identity(), d, {});
-  map.set_pose(1, pose(0.25));  // a later correction must not change the measurement
-  const PoseGraph g = keyframe_graph(map, {{0, 1, pose(0.2), 1e4 * Matrix6d::Identity()}});
+  map.add(0, 0.0, keyframes_pose(0.0), Matrix6d::Zero(), d, {});
+  map.add(10, 1.0, keyframes_pose(0.2), 1e6 * Matrix6d::Identity(), d, {});
+  map.set_pose(1, keyframes_pose(0.25));  // a later correction must not change the measurement
+  const PoseGraph g = keyframe_graph(map, {{0, 1, keyframes_pose(0.2), 1e4 * Matrix6d::Identity()}});
   ASSERT_EQ(g.num_edges(), 2u);
   EXPECT_NEAR(g.edges()[0].T_from_to.translation().x(), 0.2, 1e-12);
   // Information per frame: 1e6 over 10 frames, plus the floor.
@@ -145,8 +145,8 @@ TEST(FusedFrames, MovedFramesAreReFusedMostChangedFirst) {
   fusion::VoxelBlockGrid grid(vp);
   DepthImage wall(cam.width, cam.height, 1.0f);  // a plane 1 m in front
   KeyframeMap keys;
-  keys.add(0, 0.0, pose(0.0), Matrix6d::Identity(), wall, {});
-  keys.add(1, 0.1, pose(0.1), Matrix6d::Identity(), wall, {});
+  keys.add(0, 0.0, keyframes_pose(0.0), Matrix6d::Identity(), wall, {});
+  keys.add(1, 0.1, keyframes_pose(0.1), Matrix6d::Identity(), wall, {});
   FusedFrames fused;
   for (size_t k = 0; k < 2; ++k) {
     fusion::integrate(grid, wall, {}, cam, keys[k].T_world_camera);
@@ -154,7 +154,7 @@ TEST(FusedFrames, MovedFramesAreReFusedMostChangedFirst) {
   }
   fused.schedule(keys);
   EXPECT_EQ(fused.pending(), 0u);  // nothing moved
-  keys.set_pose(1, pose(0.1 + 0.03));
+  keys.set_pose(1, keyframes_pose(0.1 + 0.03));
   fused.schedule(keys);
   ASSERT_EQ(fused.pending(), 1u);
   EXPECT_EQ(fused.step(5, keys, grid, cam, {}, nullptr), 1u);

@@ -18,7 +18,7 @@
 #include "registration/frame_pyramid.h"
 #include "registration/opencl/device_pyramid.h"
 #include "registration/opencl/opencl_backend.h"
-#include "registration/opencl/opencl_context.h"
+#include "core/opencl/opencl_context.h"
 #include "registration/registration.h"
 #include "slam/pipeline.h"
 

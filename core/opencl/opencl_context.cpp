@@ -1,4 +1,4 @@
-#include "registration/opencl/opencl_context.h"
+#include "core/opencl/opencl_context.h"
 
 #include <algorithm>
 #include <cctype>
