@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# scripts/ci_timing.sh [COMMIT] [--keep]: the cold CI measurement of issue 32 (bench/results/ci.md).
+#
+# Clones COMMIT (default HEAD) of this repository into a fresh folder beside it (so ../shared is beside the clone,
+# as in CI), then runs what .ci/run runs, scripts/test.sh, with no compiler cache (CCACHE_DISABLE=1) and CI=true,
+# timing each phase: configure, build and suite of the release preset, then of the asan preset. It prints the phase
+# table and, per preset, the 20 most expensive build steps (.ninja_log) and the 20 slowest tests (CTest's cost
+# data), and writes them as Markdown to ci_timing.md in the clone's parent folder. Run it on a quiet machine: the
+# numbers are wall-clock seconds. The Debian packages must already be installed (scripts/setup.sh; apt is not
+# part of the measurement). The clone is removed at the end unless --keep is given.
+set -euo pipefail
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+commit="HEAD"
+keep=0
+for arg in "$@"; do
+  case "$arg" in
+    --keep) keep=1 ;;
+    *) commit="$arg" ;;
+  esac
+done
+sha="$(git -C "$repo" rev-parse --short "$commit")"
+clone="$(dirname "$repo")/ci_timing_$sha"
+report="$(dirname "$repo")/ci_timing_$sha.md"
+rm -rf "$clone"
+git clone -q --no-hardlinks "$repo" "$clone"
+git -C "$clone" checkout -q "$sha"
+bash "$clone/scripts/setup.sh" >/dev/null
+
+export CCACHE_DISABLE=1 CI=true
+cd "$clone"
+phase_names=()
+phase_seconds=()
+status=0
+phase() {  # phase NAME COMMAND...: runs and times one phase; a failure ends the measurement
+  local name="$1"
+  shift
+  local start=$SECONDS
+  if ! "$@" >"$clone/ci_timing_$name.log" 2>&1; then
+    echo "ci_timing: phase $name failed (log: $clone/ci_timing_$name.log)" >&2
+    status=1
+  fi
+  phase_names+=("$name")
+  phase_seconds+=($((SECONDS - start)))
+  echo "ci_timing: $name $((SECONDS - start)) s"
+  return $status
+}
+total_start=$SECONDS
+for preset in release asan; do
+  phase "configure_$preset" cmake --preset "$preset" || break
+  phase "build_$preset" cmake --build --preset "$preset" || break
+  phase "suite_$preset" ctest --preset "$preset" || break
+done
+total=$((SECONDS - total_start))
+
+{
+  echo "# Cold CI measurement at $sha ($(date -u +%Y-%m-%d), $(nproc) cores, CCACHE_DISABLE=1, CI=true)"
+  echo
+  echo "| phase | seconds |"
+  echo "|---|---|"
+  for i in "${!phase_names[@]}"; do
+    echo "| ${phase_names[$i]} | ${phase_seconds[$i]} |"
+  done
+  echo "| **total** | **$total** ($((total / 60)) min $((total % 60)) s) |"
+  for preset in release asan; do
+    dir="$clone/build/$preset"
+    [[ -f "$dir/.ninja_log" ]] || continue
+    steps=$(awk 'NR > 1' "$dir/.ninja_log" | wc -l)
+    cpu=$(awk 'NR > 1 {s += $2 - $1} END {printf "%.0f", s / 1000}' "$dir/.ninja_log")
+    echo
+    echo "## $preset: $steps build steps, $cpu s of compiler and linker time; the 20 most expensive"
+    echo
+    echo "| seconds | step |"
+    echo "|---|---|"
+    awk 'NR > 1 {printf "%.1f %s\n", ($2 - $1) / 1000, $4}' "$dir/.ninja_log" | sort -rn | head -20 |
+      awk '{printf "| %s | `%s` |\n", $1, $2}'
+    cost="$dir/Testing/Temporary/CTestCostData.txt"
+    log="$clone/ci_timing_suite_$preset.log"
+    if [[ -f "$log" ]]; then
+      summary=$(grep -E "tests passed|tests failed" "$log" | tail -1 || true)
+      skipped=$(grep -cE '\((Skipped|Not Run)\)$' "$log" || true)
+      echo
+      echo "$preset suite: $summary; $skipped reported skipped (Not Run / SKIP_RETURN_CODE / GTEST_SKIP)"
+    fi
+    if [[ -f "$cost" ]]; then
+      echo
+      echo "| seconds | test ($preset, 20 slowest) |"
+      echo "|---|---|"
+      awk '/^---/ {exit} NF == 3 {printf "%.1f %s\n", $3, $1}' "$cost" | sort -rn | head -20 |
+        awk '{printf "| %s | %s |\n", $1, $2}'
+    fi
+  done
+} >"$report"
+cat "$report"
+cd "$repo"
+if ((keep == 0)); then
+  rm -rf "$clone"
+fi
+exit $status
