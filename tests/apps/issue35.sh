@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Issue 35 end to end: the last hangs closed (a pose at 1e308, FIFOs given to LiDAR readers) and SIGHUP handled as
+# SIGINT / SIGTERM.
+#   bash issue35.sh HASHFUSION SCRATCH_DIR CASE
+# One CASE per defect (CTest runs each as its own test); each prints why it failed and exits 1. Every command that
+# could hang runs under `timeout`, so a regression fails (exit 124) instead of blocking the suite.
+set -u
+HF=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
+ROOT=$2/issue35_$3
+CASE=$3
+rm -rf "$ROOT" && mkdir -p "$ROOT" && cd "$ROOT" && ROOT=$(pwd) || exit 1
+fail() { echo "FAIL ($CASE): $*" >&2; exit 1; }
+printf 'fx 131.25\nfy 131.25\ncx 79.5\ncy 59.5\nwidth 160\nheight 120\n' > cam.txt
+
+case "$CASE" in
+seven_scenes_far_pose)  # 35.1: a 7-Scenes pose of 1e308 hung `run` in the trajectory plot's tick loops
+  "$HF" generate --frames 3 --camera cam.txt --out tum > log 2>&1 || fail "generate failed: $(cat log)"
+  mkdir scenes
+  n=0
+  for f in $(ls tum/rgb | sort); do
+    cp "tum/rgb/$f" "scenes/frame-00000$n.color.png"
+    cp "tum/depth/$f" "scenes/frame-00000$n.depth.png"
+    printf '1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n' > "scenes/frame-00000$n.pose.txt"
+    n=$((n + 1))
+  done
+  printf '1 0 0 1e308\n0 1 0 0\n0 0 1 0\n0 0 0 1\n' > scenes/frame-000001.pose.txt
+  timeout 120 "$HF" run --input scenes --camera cam.txt --out out > log 2>&1
+  rc=$?
+  [ $rc = 1 ] || fail "exit $rc (124 = hung): $(tail -2 log)"
+  grep -q "frame-000001.pose.txt:1: expected a translation within 1e6 m (a physical bound), got 1e+308" log ||
+    fail "unclear message: $(cat log)"
+  [ "$(wc -l < log)" = 1 ] || fail "expected one line: $(cat log)"
+  ;;
+*)
+  fail "unknown case"
+  ;;
+esac
+echo "ok ($CASE)"
