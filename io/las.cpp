@@ -12,6 +12,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/number_text.h"
+#include "core/regular_path.h"
 #include "io/las_limits.h"
 
 namespace hf {
@@ -109,6 +110,7 @@ int las_min_record_length(int point_format) {
 int las_header_size(int version_minor) { return version_minor >= 4 ? 375 : (version_minor == 3 ? 235 : 227); }
 
 LasReader::LasReader(const std::string& path) : name_(path) {
+  require_regular_path(path, "LAS file");  // an ifstream on a FIFO blocks in open() forever
   auto file = std::make_unique<std::ifstream>(path, std::ios::binary | std::ios::ate);
   if (!*file) throw Error(path + ": cannot open LAS file");
   const std::streamoff end = file->tellg();

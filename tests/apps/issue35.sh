@@ -31,6 +31,17 @@ seven_scenes_far_pose)  # 35.1: a 7-Scenes pose of 1e308 hung `run` in the traje
     fail "unclear message: $(cat log)"
   [ "$(wc -l < log)" = 1 ] || fail "expected one line: $(cat log)"
   ;;
+lidar_fifo)  # 35.2: a FIFO as a LiDAR input or as --footprints blocked forever
+  mkfifo f.las f.gpkg
+  timeout 60 "$HF" lidar --input f.las --out o > log 2>&1
+  rc=$?
+  [ $rc = 1 ] || fail "--input FIFO: exit $rc (124 = blocked): $(tail -2 log)"
+  grep -q "f.las: cannot read LAS file: it is a FIFO, not a regular file" log || fail "$(cat log)"
+  timeout 120 "$HF" lidar --input synthetic:3 --cell-m 2 --footprints f.gpkg --out o2 > log 2>&1
+  rc=$?
+  [ $rc = 1 ] || fail "--footprints FIFO: exit $rc (124 = blocked): $(tail -2 log)"
+  grep -q "f.gpkg: cannot read footprint file: it is a FIFO, not a regular file or a folder" log || fail "$(cat log)"
+  ;;
 *)
   fail "unknown case"
   ;;

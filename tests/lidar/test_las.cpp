@@ -1,6 +1,7 @@
 // The LAS reader on files this test writes (every point format x every version that allows it), on malformed
 // headers and lying point counts, and on the real files in ../shared/data when present.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cstring>
 #include <filesystem>
@@ -242,8 +243,24 @@ TEST(Las, FileRoundTripAndMissingFile) {
     hf::LasReader missing((dir / "none.las").string());
     FAIL() << "no error for a missing file";
   } catch (const hf::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("none.las: cannot open"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("none.las: cannot read LAS file (No such file"), std::string::npos);
   }
+}
+
+// Issue 35: a FIFO given as a LAS file blocked the ifstream's open forever; it is refused before opening.
+TEST(Las, FifoIsRefusedBeforeOpening) {
+  const auto dir = std::filesystem::temp_directory_path() / ("hf_las_fifo_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string fifo = (dir / "f.las").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::string message;
+  try {
+    hf::LasReader reader(fifo);
+  } catch (const hf::Error& e) {
+    message = e.what();
+  }
+  std::filesystem::remove_all(dir);
+  EXPECT_EQ(message, fifo + ": cannot read LAS file: it is a FIFO, not a regular file");
 }
 
 // Real files: their header facts from PROVENANCE.md, and the class counts re-counted there.
