@@ -60,7 +60,10 @@ void CellRaster::add(const std::vector<LasPoint>& pts, const PointClasses& class
     // Withheld points are not to be used; positions beyond any terrain (|z| > 1e6 m) are corrupt files.
     if (p.withheld || !std::isfinite(p.x) || !std::isfinite(p.y) || !(std::abs(p.z) <= 1e6)) continue;
     int c, r;
-    if (!grid.cell_of(p.x, p.y, c, r)) continue;
+    if (!grid.cell_of(p.x, p.y, c, r)) {
+      ++outside;
+      continue;
+    }
     ++points;
     const auto z = static_cast<float>(p.z);
     if (!any_points(c, r) || z < lowest_z(c, r)) lowest_z(c, r) = z;
