@@ -1,8 +1,8 @@
 // `hashfusion run`: the main job. A dataset (TUM or 7-Scenes folder, or synthetic:PRESET generated on the fly) goes
 // through the SLAM pipeline (slam/pipeline.h) and the outputs land in --out: trajectory.txt, mesh.ply, report.json,
 // report.md, render.png and, with ground truth, trajectory.png. --out is checked writable before the first frame.
-// Ctrl-C or SIGTERM stops after the current frame, writes every output for the frames processed and exits 130 /
-// 143 (apps/interrupt.h); a full voxel block pool does the same and exits 1 naming the flag that raises it.
+// Ctrl-C, SIGTERM or SIGHUP stops after the current frame, writes every output for the frames processed and exits
+// 130 / 143 / 129 (apps/interrupt.h); a full voxel block pool does the same and exits 1 naming the flag that raises it.
 #include <CLI/CLI.hpp>
 #include <unistd.h>
 

@@ -42,6 +42,23 @@ lidar_fifo)  # 35.2: a FIFO as a LiDAR input or as --footprints blocked forever
   [ $rc = 1 ] || fail "--footprints FIFO: exit $rc (124 = blocked): $(tail -2 log)"
   grep -q "f.gpkg: cannot read footprint file: it is a FIFO, not a regular file or a folder" log || fail "$(cat log)"
   ;;
+sighup)  # 35.5: SIGHUP (a dropped ssh session) stops after the current frame, writes every output, exits 129
+  "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 100000 --out out > log 2>&1 &
+  pid=$!
+  trap 'kill $pid 2>/dev/null' EXIT  # never leave a 100000-frame run behind
+  for _ in $(seq 600); do grep -q "^registration:" log && break; sleep 0.1; done
+  sleep 3  # well into the frame loop
+  kill -s HUP $pid
+  for _ in 1 2 3 4 5; do sleep 0.1; kill -s HUP $pid 2>/dev/null; done  # a second hang-up cannot cut the writing short
+  wait $pid
+  rc=$?
+  [ $rc = 129 ] || fail "exit $rc, expected 129: $(tail -3 log)"
+  grep -q "interrupted by SIGHUP: outputs written for [1-9]" log || fail "no final line: $(tail -3 log)"
+  for f in trajectory.txt mesh.ply report.json report.md render.png trajectory.png; do
+    [ -f "out/$f" ] || fail "missing out/$f"
+  done
+  grep -q '"interrupted": true' out/report.json || fail "report.json does not say interrupted"
+  ;;
 *)
   fail "unknown case"
   ;;
