@@ -59,6 +59,60 @@ sighup)  # 35.5: SIGHUP (a dropped ssh session) stops after the current frame, w
   done
   grep -q '"interrupted": true' out/report.json || fail "report.json does not say interrupted"
   ;;
+transaction)  # 35.5-35.6: outputs replaced as one set; files the previous run did not write survive; a failed run
+  # leaves --out as it was; a run killed outright leaves the previous set and a private folder the next run removes
+  run_small() { "$HF" run --input synthetic:room --camera cam.txt "$@"; }
+  "$HF" generate --frames 3 --camera cam.txt --out nogt > log 2>&1 || fail "generate failed: $(cat log)"
+  rm nogt/groundtruth.txt
+  # A user's folder: their own trajectory.png and a report.json that is not a run's.
+  mkdir user && echo mine > user/trajectory.png && echo '{"notes": 1}' > user/report.json && echo keep > user/notes.txt
+  "$HF" run --input nogt --out user > log 2>&1 || fail "run failed: $(cat log)"
+  [ "$(cat user/trajectory.png)" = mine ] || fail "the user's trajectory.png was removed or replaced"
+  [ "$(cat user/notes.txt)" = keep ] || fail "the user's notes.txt was lost"
+  grep -q '"outputs"' user/report.json || fail "report.json is not the run's"
+  # A run's own trajectory.png that no longer applies goes; a user's file beside a run's outputs stays.
+  run_small --synthetic-frames 3 --out out > log 2>&1 || fail "run failed: $(cat log)"
+  [ -f out/trajectory.png ] || fail "the first run (with ground truth) wrote no trajectory.png"
+  echo keep > out/notes.txt && mkdir out/sub && echo deep > out/sub/file.txt
+  "$HF" run --input nogt --out out > log 2>&1 || fail "run without ground truth failed: $(cat log)"
+  [ -e out/trajectory.png ] && fail "the first run's trajectory.png was left beside the second run's outputs"
+  [ "$(cat out/notes.txt)" = keep ] && [ "$(cat out/sub/file.txt)" = deep ] || fail "files of the user were lost"
+  # A failed run (the pool is full at frame 0) leaves --out as it was, and an absent --out absent.
+  before=$(cat out/report.json)
+  run_small --synthetic-frames 3 --capacity-blocks 1 --out out > log 2>&1 && fail "a 1-block pool sufficed"
+  [ "$(cat out/report.json)" = "$before" ] || fail "a failed run changed report.json"
+  run_small --synthetic-frames 3 --capacity-blocks 1 --out fresh > log 2>&1 && fail "a 1-block pool sufficed"
+  [ -e fresh ] && fail "a failed run left an --out folder behind: $(ls -A fresh)"
+  # SIGKILL mid-run: the previous set stays whole; the next run removes the dead run's private folder.
+  "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 100000 --out out > log 2>&1 &
+  pid=$!
+  trap 'kill -9 $pid 2>/dev/null' EXIT
+  for _ in $(seq 600); do grep -q "^registration:" log && break; sleep 0.1; done
+  sleep 1
+  kill -9 $pid
+  wait $pid 2>/dev/null
+  [ "$(cat out/report.json)" = "$before" ] || fail "SIGKILL changed the previous outputs"
+  ls -A | grep -q '^\.out\.run-' || fail "no private folder of the killed run (was it written in place?)"
+  "$HF" run --input nogt --out out > log 2>&1 || fail "run after SIGKILL failed: $(cat log)"
+  ls -A | grep -q '^\.out\.run-' && fail "the dead run's private folder was left: $(ls -A)"
+  [ "$(cat out/notes.txt)" = keep ] || fail "notes.txt lost after the SIGKILL and rerun"
+  ;;
+lock)  # 35.7: a second run into a folder in use exits 1 naming the holder's pid
+  "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 100000 --out out > log1 2>&1 &
+  pid=$!
+  trap 'kill $pid 2>/dev/null' EXIT
+  for _ in $(seq 600); do grep -q "^registration:" log1 && break; sleep 0.1; done
+  "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 3 --out out > log2 2>&1
+  rc=$?
+  [ $rc = 1 ] || fail "the second run exited $rc: $(tail -2 log2)"
+  grep -q "out: in use by another run (pid $pid; lock " log2 || fail "unclear message: $(cat log2)"
+  [ "$(wc -l < log2)" = 1 ] || fail "expected one line: $(cat log2)"
+  kill -s TERM $pid
+  wait $pid
+  [ -f out/report.json ] || fail "the first run wrote no outputs after SIGTERM"
+  "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 3 --out out > log2 2>&1 ||
+    fail "the lock was not released: $(cat log2)"
+  ;;
 *)
   fail "unknown case"
   ;;
