@@ -171,7 +171,7 @@ void run_lidar(LidarArgs a) {
   } else if (scene) {
     truth = scene->footprints;
   }
-  const lidar::CellRaster raster = lidar::rasterise_files(a.inputs, grid, o.classes, true);
+  const lidar::CellRaster raster = lidar::rasterise_files(a.inputs, grid, o.classes, true, lidar::OutsideGrid::refuse);
   lidar::BuiltUp b = lidar::classify_built_up(raster, o);
   const std::optional<Image<std::uint8_t>> class_truth = scene ? std::optional(scene->classes) : std::nullopt;
   if (!a.sweep.empty()) {

@@ -1,18 +1,24 @@
 // `hashfusion run`: the main job. A dataset (TUM or 7-Scenes folder, or synthetic:PRESET generated on the fly) goes
 // through the SLAM pipeline (slam/pipeline.h) and the outputs land in --out: trajectory.txt, mesh.ply, report.json,
 // report.md, render.png and, with ground truth, trajectory.png. --out is checked writable before the first frame.
-// Ctrl-C or SIGTERM stops after the current frame, writes every output for the frames processed and exits 130 /
-// 143 (apps/interrupt.h); a full voxel block pool does the same and exits 1 naming the flag that raises it.
+// Ctrl-C, SIGTERM or SIGHUP stops after the current frame, writes every output for the frames processed and exits
+// 130 / 143 / 129 (apps/interrupt.h); a full voxel block pool does the same and exits 1 naming the flag that raises it.
 #include <CLI/CLI.hpp>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <functional>
 #include <iostream>
+#include <set>
 
 #include "apps/commands.h"
 #include "apps/interrupt.h"
 #include "core/atomic_file.h"
+#include "core/bounded_read.h"
 #include "core/error.h"
+#include "core/output_transaction.h"
 #include "datasets/synthetic_source.h"
 #include "fusion/voxel_block_grid.h"
 #include "io/dataset.h"
@@ -132,10 +138,33 @@ void check_capacity_fits_memory(const slam::PipelineConfig& c) {
                 std::to_string(long(have / (1 << 20))) + " MiB of memory (lower --capacity-blocks)");
 }
 
+// The files the run that last wrote `out` listed in its report.json ("outputs"); those of a folder without a run's
+// report.json (a user's folder, a foreign report) are none, so every file there is carried over.
+std::function<bool(const std::string&)> previous_run_wrote(const std::string& out) {
+  std::set<std::string> names;
+  const std::string report = out + "/report.json";
+  struct stat st {};
+  if (::lstat(report.c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
+    try {
+      const nlohmann::json j = nlohmann::json::parse(read_regular_file(report, "previous report"));
+      if (j.is_object() && j.contains("outputs") && j["outputs"].is_array() && j.contains("config"))
+        for (const nlohmann::json& name : j["outputs"])
+          if (name.is_string() && std::count(slam::run_output_names().begin(), slam::run_output_names().end(),
+                                             name.get<std::string>()) > 0)
+            names.insert(name.get<std::string>());  // only names a run writes: a report cannot get notes.txt removed
+    } catch (const std::exception&) {
+      names.clear();  // not a run's report: nothing in the folder is known to be a run's
+    }
+  }
+  return [names](const std::string& name) { return names.count(name) > 0; };
+}
+
 void run(const RunOptions& o, const CLI::App& cmd) {
   const slam::PipelineConfig config = make_config(o, cmd);
   check_capacity_fits_memory(config);
-  prepare_output_folder(o.out);  // before the first frame, not after the last
+  // Before the first frame, not after the last: the lock, and a private folder the outputs are built in and that
+  // replaces --out in one step at the end (core/output_transaction.h).
+  OutputTransaction outputs(o.out);
   InterruptGuard guard;  // from here on Ctrl-C / SIGTERM end the loop and the outputs are still written
   std::unique_ptr<FrameSource> source = open_input(o);
   if (source->size() == 0) throw Error(o.input + ": the dataset has no frames");
@@ -151,7 +180,9 @@ void run(const RunOptions& o, const CLI::App& cmd) {
   control.progress_label = "run";
   control.global = o.global;
 #if HF_HAVE_VIEWER
-  RunView view = start_viewer(o, *source, pipeline, control, guard.flag());
+  RunOptions staged = o;
+  staged.out = outputs.folder();  // the viewer's saved meshes are outputs of this run too
+  RunView view = start_viewer(staged, *source, pipeline, control, guard.flag());
 #else
   if (o.view || !o.screenshot.empty())
     throw Error("--view / --screenshot: the viewer is not built in (install libglfw3-dev and libglm-dev, reconfigure)");
@@ -172,9 +203,13 @@ void run(const RunOptions& o, const CLI::App& cmd) {
     std::cerr << "input ended: " << result.input_ended << ": writing outputs for the " << result.frames.size()
               << " frames processed\n";
   const slam::RunSummary summary = slam::summarize(result, pipeline, *source, o.input);
-  const std::vector<std::string> written = slam::write_run_outputs(o.out, result, summary, pipeline, *source);
+  const std::vector<std::string> written =
+      slam::write_run_outputs(outputs.folder(), result, summary, pipeline, *source);
+  outputs.commit(previous_run_wrote(outputs.target()));
   std::cout << "outputs:\n";
-  for (const auto& p : written) std::cout << "  " << std::filesystem::absolute(p).string() << "\n";
+  for (const auto& p : written)
+    std::cout << "  " << (std::filesystem::path(outputs.target()) / std::filesystem::path(p).filename()).string()
+              << "\n";
   std::cout << "frames: " << summary.frames << " (" << summary.frames_lost << " lost, " << summary.frames_bad
             << " unreadable), " << summary.fps << " fps\n";
   if (summary.capture)

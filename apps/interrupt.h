@@ -1,13 +1,15 @@
-// Ctrl-C (SIGINT) and SIGTERM (what `timeout`, systemd and batch schedulers send) while a subcommand runs.
+// Ctrl-C (SIGINT), SIGTERM (what `timeout`, systemd and batch schedulers send) and SIGHUP (a dropped ssh session or
+// closed terminal) while a subcommand runs.
 //
 //   InterruptGuard guard;                         // installs the handlers; the destructor restores the old ones
 //   control.stop = guard.flag();                  // the frame loop polls it and stops after the current frame
 //   ... write every output ...
-//   guard.exit_if_interrupted("outputs written for 12 frames");   // throws Interrupted: main() exits 130 / 143
+//   guard.exit_if_interrupted("outputs written for 12 frames");   // throws Interrupted: main() exits 130 / 143 / 129
 //
 // The handler only records the first signal and raises the flag, and it stays installed until the guard is
 // destroyed, so a second Ctrl-C during the write phase cannot cut it short (each output is also written atomically,
-// core/atomic_file.h). Exit status after an interruption is 128 + the signal (130 for SIGINT, 143 for SIGTERM),
+// core/atomic_file.h). Exit status after an interruption is 128 + the signal (130 for SIGINT, 143 for SIGTERM, 129
+// for SIGHUP: the terminal is gone, but the outputs for the work done are still wanted),
 // so a script can tell an interrupted run, whose outputs are complete for the frames done, from a finished one.
 // One guard at a time (the handlers are process-wide); not thread-safe to construct concurrently.
 #pragma once
@@ -51,10 +53,12 @@ class InterruptGuard {
     action.sa_flags = SA_RESTART;  // reads and writes in progress resume instead of failing with EINTR
     sigaction(SIGINT, &action, &previous_int_);
     sigaction(SIGTERM, &action, &previous_term_);
+    sigaction(SIGHUP, &action, &previous_hup_);
   }
   ~InterruptGuard() {
     sigaction(SIGINT, &previous_int_, nullptr);
     sigaction(SIGTERM, &previous_term_, nullptr);
+    sigaction(SIGHUP, &previous_hup_, nullptr);
   }
   InterruptGuard(const InterruptGuard&) = delete;
   InterruptGuard& operator=(const InterruptGuard&) = delete;
@@ -67,12 +71,14 @@ class InterruptGuard {
   void exit_if_interrupted(const std::string& what) const {
     const int sig = signal();
     if (sig == 0) return;
-    throw Interrupted(sig, std::string("interrupted by ") + (sig == SIGTERM ? "SIGTERM" : "SIGINT") + ": " + what);
+    const char* name = sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP" : "SIGINT";
+    throw Interrupted(sig, std::string("interrupted by ") + name + ": " + what);
   }
 
  private:
   struct sigaction previous_int_ {};
   struct sigaction previous_term_ {};
+  struct sigaction previous_hup_ {};
 };
 
 }  // namespace hf::apps

@@ -1,6 +1,7 @@
 // hashfusion: real-time RGB-D SLAM and 3D reconstruction. `hashfusion --help` lists the subcommands.
 // Exit status: 0 done, 1 bad input or arguments (one line on stderr naming the file), 2 internal error,
-// 130 / 143 interrupted by SIGINT / SIGTERM after writing every output for the work done (apps/interrupt.h).
+// 130 / 143 / 129 interrupted by SIGINT / SIGTERM / SIGHUP after writing every output for the work done
+// (apps/interrupt.h).
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <iostream>

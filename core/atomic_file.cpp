@@ -2,10 +2,12 @@
 
 #include <fcntl.h>
 #include <stdio.h>  // renameat2
+#include <sys/file.h>  // flock
 #include <sys/random.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -15,6 +17,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/output_transaction.h"
 
 namespace hf {
 namespace {
@@ -237,6 +240,133 @@ void swap_folder_into_place(const std::string& fresh, const std::string& dir) {
     fs::remove_all(fresh, ec);  // now the old contents
   }
   sync_folder(parent_of(dir));
+}
+
+// --- OutputTransaction ------------------------------------------------------------------------------------------
+
+namespace {
+
+// `out` as an absolute path without a trailing "/" or "."; a link to a folder is followed (exchanging the link
+// itself would leave its target stale).
+fs::path output_transaction_target(const std::string& out) {
+  if (out.empty()) throw Error("expected a non-empty output folder");
+  fs::path p = fs::absolute(out).lexically_normal();
+  if (!p.has_filename()) p = p.parent_path();
+  std::error_code ec;
+  if (fs::is_symlink(fs::symlink_status(p, ec))) {
+    const fs::path target = fs::canonical(p, ec);
+    if (ec) throw Error(out + ": output folder is a dangling link");
+    p = target;
+  }
+  if (p == p.root_path() || !p.has_filename()) throw Error(out + ": cannot replace the root folder with outputs");
+  const fs::file_status st = fs::status(p, ec);
+  if (fs::exists(st) && !fs::is_directory(st)) throw Error(out + ": output folder exists and is not a folder");
+  const fs::path cwd = fs::current_path(ec);
+  if (!ec) {
+    if (std::mismatch(p.begin(), p.end(), cwd.begin(), cwd.end()).first == p.end())
+      throw Error(out + ": output folder is (or holds) the current folder; the outputs replace the whole folder, so "
+                        "give them a folder of their own");
+  }
+  return p;
+}
+
+// The pid written in a lock file, for the message; "unknown" when it cannot be read.
+std::string output_transaction_holder(int fd) {
+  char text[32] = {};
+  const ssize_t n = ::pread(fd, text, sizeof text - 1, 0);
+  std::string pid = n > 0 ? std::string(text, size_t(n)) : std::string();
+  while (!pid.empty() && (pid.back() == '\n' || pid.back() == ' ')) pid.pop_back();
+  return pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos ? "unknown" : pid;
+}
+
+// Recreates `from` (a folder: mkdir and recurse; anything else: a hard link to the same inode, links not followed)
+// at `to`. Throws hf::Error naming `out`.
+void output_transaction_carry(const fs::path& from, const fs::path& to, const std::string& out) {
+  struct stat st {};
+  if (::lstat(from.c_str(), &st) != 0) return;  // gone meanwhile: nothing to keep
+  auto fail = [&](int err) {
+    throw Error(out + ": cannot carry " + from.filename().string() + " over into the new outputs (" +
+                errno_text(err) + "); nothing was replaced");
+  };
+  if (S_ISDIR(st.st_mode)) {
+    if (::mkdir(to.c_str(), st.st_mode & 07777) != 0) fail(errno);
+    std::error_code ec;
+    for (const fs::directory_entry& e : fs::directory_iterator(from, ec))
+      output_transaction_carry(e.path(), to / e.path().filename(), out);
+    if (ec) fail(ec.value());
+    return;
+  }
+  if (::linkat(AT_FDCWD, from.c_str(), AT_FDCWD, to.c_str(), 0) != 0) fail(errno);
+}
+
+}  // namespace
+
+OutputTransaction::OutputTransaction(const std::string& out) {
+  const fs::path target = output_transaction_target(out);
+  out_ = target.string();
+  const fs::path parent = target.parent_path();
+  const std::string name = target.filename().string();
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  if (ec) throw Error(out + ": cannot create the folder " + parent.string() + " (" + ec.message() + ")");
+
+  const std::string lock_path = (parent / ("." + name + ".lock")).string();
+  lock_fd_ = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (lock_fd_ < 0) throw Error(out + ": cannot create the lock file " + lock_path + " (" + errno_text(errno) + ")");
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    const std::string holder = output_transaction_holder(lock_fd_);
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    if (err == EWOULDBLOCK)
+      throw Error(out + ": in use by another run (pid " + holder + "; lock " + lock_path + ")");
+    throw Error(out + ": cannot lock " + lock_path + " (" + errno_text(err) + ")");
+  }
+  // The pid only serves the message of a second run: a failure to write it leaves the lock holding.
+  const std::string pid = std::to_string(::getpid()) + "\n";
+  if (::ftruncate(lock_fd_, 0) == 0) (void)!::pwrite(lock_fd_, pid.data(), pid.size(), 0);
+
+  // Under the lock, a private folder of ours for this `out` belongs to a run that died before its commit.
+  const std::string prefix = "." + name + ".run-";
+  for (const fs::directory_entry& e : fs::directory_iterator(parent, ec)) {
+    const std::string entry = e.path().filename().string();
+    if (entry.size() == prefix.size() + 6 && entry.compare(0, prefix.size(), prefix) == 0 &&
+        e.is_directory(ec) && !e.is_symlink(ec))
+      fs::remove_all(e.path(), ec);  // does not follow links
+  }
+
+  std::string pattern = (parent / (prefix + "XXXXXX")).string();
+  if (::mkdtemp(pattern.data()) == nullptr) {
+    const int err = errno;
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    throw Error(out + ": output folder is not writable: cannot create a folder in " + parent.string() + " (" +
+                errno_text(err) + ")");
+  }
+  folder_ = pattern;
+}
+
+OutputTransaction::~OutputTransaction() {
+  std::error_code ec;
+  if (!committed_ && !folder_.empty()) fs::remove_all(folder_, ec);
+  if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the flock
+}
+
+void OutputTransaction::commit(const std::function<bool(const std::string&)>& previous_run_wrote) {
+  std::error_code ec;
+  struct stat st {};
+  if (::lstat(out_.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
+    for (const fs::directory_entry& e : fs::directory_iterator(out_, ec)) {
+      const std::string entry = e.path().filename().string();
+      struct stat mine {};
+      if (::lstat((fs::path(folder_) / entry).c_str(), &mine) == 0) continue;  // this run wrote it anew
+      if (previous_run_wrote(entry)) continue;                                // the previous run's: replaced
+      output_transaction_carry(e.path(), fs::path(folder_) / entry, out_);
+    }
+    if (ec) throw Error(out_ + ": cannot list the old outputs (" + ec.message() + "); nothing was replaced");
+  }
+  swap_folder_into_place(folder_, out_);
+  committed_ = true;
 }
 
 }  // namespace hf

@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "core/error.h"
+#include "core/regular_path.h"
 
 namespace hf {
 namespace {
@@ -71,6 +72,14 @@ std::string read_regular_file(const std::string& path, const std::string& what, 
   if (got > max_bytes) throw Error(path + ": " + what + " is larger than the " + limit_text(max_bytes) + " limit");
   bytes.resize(got);
   return bytes;
+}
+
+void require_regular_path(const std::string& path, const std::string& what, bool folder_allowed) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) throw Error(path + ": cannot read " + what + " (" + std::strerror(errno) + ")");
+  if (S_ISREG(st.st_mode) || (folder_allowed && S_ISDIR(st.st_mode))) return;
+  throw Error(path + ": cannot read " + what + ": it is " + kind_of(st.st_mode) + ", not a regular file" +
+              (folder_allowed ? " or a folder" : ""));
 }
 
 }  // namespace hf

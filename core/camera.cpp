@@ -9,7 +9,9 @@
 
 #include "core/atomic_file.h"
 #include "core/bounded_read.h"
+#include "core/camera_bounds.h"
 #include "core/error.h"
+#include "core/number_text.h"
 
 namespace hf {
 namespace {
@@ -27,12 +29,37 @@ const std::map<std::string, PinholeCamera>& presets() {
   return table;
 }
 
-bool valid(const PinholeCamera& c) {
-  return std::isfinite(c.fx) && std::isfinite(c.fy) && std::isfinite(c.cx) && std::isfinite(c.cy) && c.fx > 0 &&
-         c.fy > 0 && c.width > 0 && c.height > 0 && c.width <= 16384 && c.height <= 16384;
+// The line of a JSON key's first occurrence ("\"fx\""), so a bad value can be placed in the file; 0 when absent.
+int camera_json_key_line(const std::string& text, const std::string& key) {
+  const size_t at = text.find('"' + key + '"');
+  return at == std::string::npos ? 0 : 1 + int(std::count(text.begin(), text.begin() + long(at), '\n'));
 }
 
 }  // namespace
+
+void check_camera_intrinsics(const PinholeCamera& c, const std::string& file, const std::map<std::string, int>& lines) {
+  auto line = [&](const char* key) {
+    const auto it = lines.find(key);
+    return it == lines.end() ? 0 : it->second;
+  };
+  auto focal = [&](const char* key, double f, int size) {
+    const double lo = size * kMinFocalPerPixel, hi = size * kMaxFocalPerPixel;
+    if (!(f >= lo && f <= hi))
+      throw ParseError(file, line(key), std::string("expected ") + key + " within " + number_for_message(lo) + ".." +
+                                            number_for_message(hi) + " px (fields of view 0.5..170 degrees over " +
+                                            std::to_string(size) + " px), got " + number_for_message(f));
+  };
+  auto centre = [&](const char* key, double v, int size) {
+    if (!(v >= -size && v <= 2.0 * size))
+      throw ParseError(file, line(key), std::string("expected ") + key + " within " + std::to_string(-size) + ".." +
+                                            std::to_string(2 * size) + " px (the principal point near the image), got " +
+                                            number_for_message(v));
+  };
+  focal("fx", c.fx, c.width);
+  focal("fy", c.fy, c.height);
+  centre("cx", c.cx, c.width);
+  centre("cy", c.cy, c.height);
+}
 
 Eigen::Matrix3d PinholeCamera::K() const {
   Eigen::Matrix3d K;
@@ -70,7 +97,9 @@ std::vector<std::string> PinholeCamera::preset_names() {
 }
 
 PinholeCamera PinholeCamera::parse(const std::string& text, const std::string& file) {
+  static const std::string kCameraKeys[] = {"fx", "fy", "cx", "cy", "width", "height"};
   PinholeCamera c;
+  std::map<std::string, int> lines;  // the line of each key, for bounds checked after all are read
   size_t first = text.find_first_not_of(" \t\r\n");
   if (first != std::string::npos && text[first] == '{') {
     nlohmann::json j;
@@ -90,9 +119,16 @@ PinholeCamera PinholeCamera::parse(const std::string& text, const std::string& f
     }
     auto num = [&](const char* key) -> double {
       if (!j.is_object() || !j.contains(key) || !j[key].is_number())
-        throw ParseError(file, 0, std::string("expected a number '") + key + "'");
+        throw ParseError(file, camera_json_key_line(text, key), std::string("expected a number '") + key + "'");
+      lines[key] = camera_json_key_line(text, key);
       return j[key].get<double>();
     };
+    // An unknown key is a calibration this reader would silently ignore ("k1": distortion), as --config refuses.
+    if (j.is_object())
+      for (const auto& item : j.items())
+        if (std::find(std::begin(kCameraKeys), std::end(kCameraKeys), item.key()) == std::end(kCameraKeys))
+          throw ParseError(file, camera_json_key_line(text, item.key()),
+                           "expected only the keys fx fy cx cy width height, got " + quote_for_message(item.key()));
     c.fx = num("fx");
     c.fy = num("fy");
     c.cx = num("cx");
@@ -120,9 +156,11 @@ PinholeCamera PinholeCamera::parse(const std::string& text, const std::string& f
       std::string rest;
       if (ls >> rest)
         throw ParseError(file, lineno, "expected one value after " + quote_for_message(key) + ", got " + quote_for_message(rest));
-      static const char* keys[] = {"fx", "fy", "cx", "cy", "width", "height"};
-      if (std::find(std::begin(keys), std::end(keys), key) == std::end(keys))
+      if (std::find(std::begin(kCameraKeys), std::end(kCameraKeys), key) == std::end(kCameraKeys))
         throw ParseError(file, lineno, "expected one of fx fy cx cy width height, got " + quote_for_message(key));
+      if (lines.count(key))  // two fx lines: which one is the calibration? Neither silently.
+        throw ParseError(file, lineno, "'" + key + "' given twice (first on line " + std::to_string(lines[key]) + ")");
+      lines[key] = lineno;
       values[key] = value;
     }
     for (const char* key : {"fx", "fy", "cx", "cy", "width", "height"}) {
@@ -138,7 +176,7 @@ PinholeCamera PinholeCamera::parse(const std::string& text, const std::string& f
     c.width = int(values["width"]);
     c.height = int(values["height"]);
   }
-  if (!valid(c)) throw ParseError(file, 0, "expected finite fx, fy > 0, cx, cy and a positive size");
+  check_camera_intrinsics(c, file, lines);
   return c;
 }
 

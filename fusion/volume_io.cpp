@@ -12,6 +12,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/regular_path.h"
 
 namespace hf::fusion {
 
@@ -159,6 +160,7 @@ Volume parse_volume(std::string_view bytes, const std::string& name) {
 }
 
 Volume load_volume(const std::string& path) {
+  require_regular_path(path, "volume file");  // an ifstream on a FIFO or device blocks or reads endlessly
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ParseError(path, 0, "expected a readable hashfusion volume file (cannot open it)");
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -11,6 +11,7 @@
 #include <emmintrin.h>
 #endif
 
+#include "core/number_text.h"
 #include "fusion/block_hash_table.h"
 
 namespace hf::fusion {
@@ -24,13 +25,21 @@ int floor_div8(int v) { return v >= 0 ? v / HF_BLOCK_SIZE : -((-v + HF_BLOCK_SIZ
 
 }  // namespace
 
+namespace {
+// The finest voxel accepted: 0.1 mm, beyond any depth sensor's resolution.
+constexpr double kMinVoxelM = 1e-4;
+}  // namespace
+
 void VolumeParams::validate() const {
   auto fail = [](const std::string& what) { throw Error("invalid volume parameters: " + what); };
-  if (!(voxel_m > 0.0 && voxel_m <= 10.0)) fail("voxel_m must be in (0, 10] metres, got " + std::to_string(voxel_m));
+  // Below 0.1 mm no sensor resolves anything and a room needs more blocks than any pool holds: every frame would be
+  // lost to a full pool without a word on why.
+  if (!(voxel_m >= kMinVoxelM && voxel_m <= 10.0))
+    fail("voxel_m must be in [0.0001, 10] metres, got " + number_for_message(voxel_m));
   if (!(truncation_vox >= 1.0 && truncation_vox <= 64.0))
-    fail("truncation_vox must be in [1, 64] voxels, got " + std::to_string(truncation_vox));
+    fail("truncation_vox must be in [1, 64] voxels, got " + number_for_message(truncation_vox));
   if (!(max_weight >= 1.0f && max_weight <= 4095.0f))
-    fail("max_weight must be in [1, 4095], got " + std::to_string(max_weight));
+    fail("max_weight must be in [1, 4095], got " + number_for_message(max_weight));
   if (capacity_blocks < 1 || capacity_blocks > kMaxCapacityBlocks)
     fail("capacity_blocks must be in [1, 2^26], got " + std::to_string(capacity_blocks));
 }

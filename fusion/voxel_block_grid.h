@@ -75,8 +75,8 @@ struct VolumeParams {
   size_t capacity_blocks = 1 << 17;  // pool size: 131072 blocks = 512 MiB at 4 KiB per block (1 .. 2^26)
   double truncation_m() const { return truncation_vox * voxel_m; }
   double block_m() const { return HF_BLOCK_SIZE * voxel_m; }
-  // Throws hf::Error naming the bad field: voxel_m in (0, 10], truncation_vox in [1, 64] (at least one voxel so
-  // a zero crossing is always sampled; at most 8 blocks), max_weight in [1, 4095] (fits the uint16 weight),
+  // Throws hf::Error naming the bad field: voxel_m in [1e-4, 10], truncation_vox in [1, 64] (at least one voxel
+  // so a zero crossing is always sampled; at most 8 blocks), max_weight in [1, 4095] (fits the uint16 weight),
   // capacity_blocks in [1, 2^26].
   void validate() const;
 };

@@ -7,6 +7,7 @@
 
 #include "core/bounded_read.h"
 #include "core/error.h"
+#include "io/image_header.h"
 #include "io/prefetch.h"
 #include "io/seven_scenes.h"
 #include "io/tum_dataset.h"
@@ -125,8 +126,10 @@ std::string load_frame_images(RgbdFrame& frame, const PinholeCamera& camera, con
     return message;
   };
   try {
-    frame.depth = load_depth(frame.depth_file, decoding);
-    frame.color = load_color(frame.color_file);
+    // The camera's size is checked against each image's header before it is decoded (io/image_io.h).
+    const ExpectedImageSize expected{camera.width, camera.height};
+    frame.depth = load_depth(frame.depth_file, decoding, expected);
+    frame.color = load_color(frame.color_file, expected);
   } catch (const Error& e) {
     return fail(e.what());
   }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <ostream>
@@ -12,6 +13,7 @@
 #include "core/atomic_file.h"
 #include "core/bounded_read.h"
 #include "core/error.h"
+#include "io/image_header.h"
 
 namespace hf {
 namespace {
@@ -39,17 +41,88 @@ const char* format_of_name(const std::string& path) {
   return nullptr;
 }
 
+std::uint32_t image_io_be32(const std::string& b, size_t at) {
+  return std::uint32_t(std::uint8_t(b[at])) << 24 | std::uint32_t(std::uint8_t(b[at + 1])) << 16 |
+         std::uint32_t(std::uint8_t(b[at + 2])) << 8 | std::uint32_t(std::uint8_t(b[at + 3]));
+}
+std::uint32_t image_io_u16(const std::string& b, size_t at, bool big_endian) {
+  const std::uint32_t x = std::uint8_t(b[at]), y = std::uint8_t(b[at + 1]);
+  return big_endian ? (x << 8 | y) : (y << 8 | x);
+}
+std::uint32_t image_io_u32(const std::string& b, size_t at, bool big_endian) {
+  const std::uint32_t lo = image_io_u16(b, at, big_endian), hi = image_io_u16(b, at + 2, big_endian);
+  return big_endian ? (lo << 16 | hi) : (hi << 16 | lo);
+}
+
+// Width and height from a JPEG's first SOF marker: markers are walked by their lengths, each step moving forward,
+// so the walk ends within the bytes whatever they hold.
+std::optional<ImageHeaderSize> jpeg_header_size(const std::string& b) {
+  size_t at = 2;  // after SOI
+  while (at + 4 <= b.size()) {
+    if (std::uint8_t(b[at]) != 0xff) return std::nullopt;
+    const std::uint8_t marker = std::uint8_t(b[at + 1]);
+    if (marker == 0xff) {  // fill byte
+      ++at;
+      continue;
+    }
+    if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd8)) {  // markers without a length
+      at += 2;
+      continue;
+    }
+    const size_t length = image_io_u16(b, at + 2, true);
+    const bool sof = marker >= 0xc0 && marker <= 0xcf && marker != 0xc4 && marker != 0xc8 && marker != 0xcc;
+    if (sof) {
+      if (at + 9 > b.size()) return std::nullopt;
+      return ImageHeaderSize{image_io_u16(b, at + 7, true), image_io_u16(b, at + 5, true), "JPEG SOF"};
+    }
+    if (length < 2) return std::nullopt;
+    at += 2 + length;
+  }
+  return std::nullopt;
+}
+
+// Width and height from the first IFD of a TIFF (tags 256 ImageWidth and 257 ImageLength, SHORT or LONG).
+std::optional<ImageHeaderSize> tiff_header_size(const std::string& b) {
+  if (b.size() < 8) return std::nullopt;
+  const bool big = b[0] == 'M';
+  const size_t ifd = image_io_u32(b, 4, big);
+  if (ifd + 2 > b.size()) return std::nullopt;
+  const size_t entries = image_io_u16(b, ifd, big);
+  std::optional<std::uint32_t> width, height;
+  for (size_t k = 0; k < entries && ifd + 2 + 12 * (k + 1) <= b.size(); ++k) {
+    const size_t e = ifd + 2 + 12 * k;
+    const std::uint32_t tag = image_io_u16(b, e, big), type = image_io_u16(b, e + 2, big);
+    if ((tag != 256 && tag != 257) || (type != 3 && type != 4)) continue;
+    const std::uint32_t value = type == 3 ? image_io_u16(b, e + 8, big) : image_io_u32(b, e + 8, big);
+    (tag == 256 ? width : height) = value;
+  }
+  if (!width || !height) return std::nullopt;
+  return ImageHeaderSize{*width, *height, "TIFF IFD"};
+}
+
 // Reads only a regular file of bounded size (core/bounded_read.h), refuses content whose format contradicts the
-// name (a JPEG renamed .png is a different, lossy recording), and decodes the bytes as they are (no conversion, so
-// the caller can check channels and bit depth). cv::imdecode may throw cv::Exception on corrupt data; catching it
-// keeps the failure a single hf::Error naming the file.
-cv::Mat read_image(const std::string& path, const char* what) {
+// name (a JPEG renamed .png is a different, lossy recording), checks the size its header states against
+// `expected` (or kMaxImagePixels) before decoding, and decodes the bytes as they are (no conversion, so the caller
+// can check channels and bit depth). cv::imdecode may throw cv::Exception on corrupt data; catching it keeps the
+// failure a single hf::Error naming the file.
+cv::Mat read_image(const std::string& path, const char* what, const ExpectedImageSize& expected) {
   const std::string bytes = read_regular_file(path, std::string(what) + " image", kMaxImageFileBytes);
   const char* content = format_of_content(bytes);
   const char* named = format_of_name(path);
   if (content && named && std::strcmp(content, named) != 0)
     throw Error(path + ": " + what + " image holds " + content + " data but its name says " + named +
                 " (a renamed file?)");
+  // A 760 KB PNG can promise 20000 x 20000 16-bit pixels: 800 MB and seconds of decoding before any size check.
+  if (const std::optional<ImageHeaderSize> size = image_header_size(bytes)) {
+    const std::string stated = std::string(what) + " image is " + std::to_string(size->width) + "x" +
+                               std::to_string(size->height) + " (its " + size->source + ")";
+    if (expected.width > 0 && (size->width != std::uint32_t(expected.width) || size->height != std::uint32_t(expected.height)))
+      throw Error(path + ": " + stated + " but the camera is " + std::to_string(expected.width) + "x" +
+                  std::to_string(expected.height) + "; not decoded");
+    if (double(size->width) * double(size->height) > double(kMaxImagePixels))
+      throw Error(path + ": " + stated + ", more than the " + std::to_string(kMaxImagePixels) +
+                  "-pixel limit; not decoded");
+  }
   cv::Mat image;
   try {
     const cv::Mat buffer(1, int(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
@@ -82,6 +155,25 @@ void write_bytes(const std::string& path, const std::vector<unsigned char>& byte
 
 }  // namespace
 
+std::optional<ImageHeaderSize> image_header_size(const std::string& bytes) {
+  const char* format = format_of_content(bytes);
+  if (!format) return std::nullopt;
+  const std::string f = format;
+  if (f == "PNG") {  // signature, then the IHDR chunk: length, "IHDR", width, height (big-endian)
+    if (bytes.size() < 24 || bytes.compare(12, 4, "IHDR") != 0) return std::nullopt;
+    return ImageHeaderSize{image_io_be32(bytes, 16), image_io_be32(bytes, 20), "PNG IHDR"};
+  }
+  if (f == "JPEG") return jpeg_header_size(bytes);
+  if (f == "TIFF") return tiff_header_size(bytes);
+  if (f == "BMP") {  // BITMAPINFOHEADER: width, then height (negative: top-down), little-endian
+    if (bytes.size() < 26) return std::nullopt;
+    const auto height = std::int32_t(image_io_u32(bytes, 22, false));
+    return ImageHeaderSize{image_io_u32(bytes, 18, false),
+                           height < 0 ? std::uint32_t(0) - std::uint32_t(height) : std::uint32_t(height), "BMP header"};
+  }
+  return std::nullopt;  // EXR: OpenCV's own limit (2^30 pixels) is the only one
+}
+
 DepthImage depth_from_raw16(const std::uint16_t* raw, int width, int height, const DepthDecoding& decoding) {
   if (!(decoding.scale > 0.0) || !std::isfinite(decoding.scale))
     throw Error("depth scale must be a positive number, got " + std::to_string(decoding.scale));
@@ -96,10 +188,10 @@ DepthImage depth_from_raw16(const std::uint16_t* raw, int width, int height, con
   return depth;
 }
 
-DepthImage load_depth(const std::string& path, const DepthDecoding& decoding) {
+DepthImage load_depth(const std::string& path, const DepthDecoding& decoding, const ExpectedImageSize& expected) {
   if (!(decoding.scale > 0.0) || !std::isfinite(decoding.scale))
     throw Error(path + ": depth scale must be a positive number, got " + std::to_string(decoding.scale));
-  const cv::Mat image = read_image(path, "depth");
+  const cv::Mat image = read_image(path, "depth", expected);
   if (image.channels() != 1)
     throw Error(path + ": expected a single-channel depth image, got " + std::to_string(image.channels()) + " channels");
   const int w = image.cols, h = image.rows;
@@ -122,8 +214,12 @@ DepthImage load_depth(const std::string& path, const DepthDecoding& decoding) {
               std::to_string(image.elemSize1() * 8) + "-bit samples");
 }
 
-ColorImage load_color(const std::string& path) {
-  const cv::Mat image = read_image(path, "colour");
+DepthImage load_depth(const std::string& path, const DepthDecoding& decoding) { return load_depth(path, decoding, {}); }
+
+ColorImage load_color(const std::string& path) { return load_color(path, ExpectedImageSize{}); }
+
+ColorImage load_color(const std::string& path, const ExpectedImageSize& expected) {
+  const cv::Mat image = read_image(path, "colour", expected);
   const int channels = image.channels();
   if (image.depth() != CV_8U && image.depth() != CV_16U)
     throw Error(path + ": expected an 8- or 16-bit colour image, got " + std::to_string(image.elemSize1() * 8) +

@@ -7,9 +7,13 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <tuple>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/number_text.h"
+#include "core/regular_path.h"
+#include "io/las_limits.h"
 
 namespace hf {
 namespace {
@@ -106,6 +110,7 @@ int las_min_record_length(int point_format) {
 int las_header_size(int version_minor) { return version_minor >= 4 ? 375 : (version_minor == 3 ? 235 : 227); }
 
 LasReader::LasReader(const std::string& path) : name_(path) {
+  require_regular_path(path, "LAS file");  // an ifstream on a FIFO blocks in open() forever
   auto file = std::make_unique<std::ifstream>(path, std::ios::binary | std::ios::ate);
   if (!*file) throw Error(path + ": cannot open LAS file");
   const std::streamoff end = file->tellg();
@@ -203,10 +208,22 @@ void LasReader::read_header() {
   if (h.record_length < min_length)
     fail(name_, 105, "point record length " + std::to_string(h.record_length) + " below the " + std::to_string(min_length) +
                          " bytes of format " + std::to_string(h.point_format));
+  // Physical bounds (io/las.h): a scale of 1e300 is finite, yet makes every coordinate and grid size absurd.
+  static const char* const kAxis[] = {"x", "y", "z"};
   for (int i = 0; i < 3; ++i) {
-    if (!std::isfinite(h.scale[i]) || h.scale[i] == 0.0)
-      fail(name_, 131 + 8 * i, "scale factor must be finite and non-zero");
-    if (!std::isfinite(h.offset[i])) fail(name_, 155 + 8 * i, "offset must be finite");
+    const std::string axis = kAxis[i];
+    if (!(std::fabs(h.scale[i]) >= kLasMinScale && std::fabs(h.scale[i]) <= kLasMaxScale))
+      fail(name_, 131 + 8 * i,
+           axis + " scale factor " + number_for_message(h.scale[i]) + " outside " + number_for_message(kLasMinScale) +
+               ".." + number_for_message(kLasMaxScale) + " (units per integer step)");
+    if (!(std::fabs(h.offset[i]) <= kLasMaxOffset))
+      fail(name_, 155 + 8 * i, axis + " offset " + number_for_message(h.offset[i]) + " beyond " +
+                                   number_for_message(kLasMaxOffset));
+    for (const auto& [value, at, what] : {std::tuple{h.max[i], 179 + 16 * i, " bounding box maximum "},
+                                          std::tuple{h.min[i], 187 + 16 * i, " bounding box minimum "}})
+      if (!(std::fabs(value) <= kLasMaxCoordinate))
+        fail(name_, std::uint64_t(at), axis + what + number_for_message(value) + " beyond " +
+                                           number_for_message(kLasMaxCoordinate));
   }
   // A count that lies is caught here, before any point is read: the records must fit in the file.
   const std::uint64_t room = size_ - h.offset_to_point_data;

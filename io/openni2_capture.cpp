@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "core/error.h"
+#include "core/regular_path.h"
 #include "io/dataset.h"
 #include "io/frame_pairing.h"
 #include "io/pixel_formats.h"
@@ -134,8 +135,10 @@ class OpenNi2Capture : public CaptureDevice {
     const bool file = uri.size() > 4 && uri.compare(uri.size() - 4, 4, ".oni") == 0;
     asked_ = file ? uri : "openni2://" + uri;
     if (file) {
+      // OpenNI2's file driver would block on a FIFO and fail obscurely on a folder or device: say what it is.
       std::error_code ec;
-      if (!std::filesystem::is_regular_file(uri, ec)) throw Error(uri + ": no such recording (.oni file)");
+      if (!std::filesystem::exists(uri, ec)) throw Error(uri + ": no such recording (.oni file)");
+      require_regular_path(uri, "recording (.oni file)");
     }
     if (device_.open(uri.empty() ? ni::ANY_DEVICE : uri.c_str()) != ni::STATUS_OK) {
       const std::string error = extended_error();

@@ -10,15 +10,20 @@
 #include <sstream>
 
 #include "core/bounded_read.h"
+#include "core/camera_bounds.h"
 #include "core/error.h"
+#include "core/number_text.h"
+#include "io/trajectory_io.h"
 
 namespace fs = std::filesystem;
 
 namespace hf {
 namespace {
 
-// Reads `rows` non-blank lines of exactly `cols` finite numbers each (row-major), nothing else.
-std::vector<double> parse_number_grid(const std::string& text, const std::string& name, int rows, int cols) {
+// Reads `rows` non-blank lines of exactly `cols` finite numbers each (row-major), nothing else; `row_lines` (when
+// given) gets each row's line number, so a value refused later can still be placed in the file.
+std::vector<double> parse_number_grid(const std::string& text, const std::string& name, int rows, int cols,
+                                      std::vector<int>* row_lines = nullptr) {
   const std::string shape = std::to_string(rows) + " lines of " + std::to_string(cols) + " numbers";
   std::vector<double> values;
   std::istringstream in(text);
@@ -45,6 +50,7 @@ std::vector<double> parse_number_grid(const std::string& text, const std::string
     if (n == 0) continue;
     if (n != cols)
       throw ParseError(name, lineno, "expected " + std::to_string(cols) + " numbers on the line, got " + std::to_string(n));
+    if (row_lines) row_lines->push_back(lineno);
     ++row;
   }
   if (row != rows) throw ParseError(name, 0, "expected " + shape + ", got " + std::to_string(row) + " lines");
@@ -67,12 +73,19 @@ int depth_frame_number(const std::string& filename, std::string& digits) {
 }  // namespace
 
 SE3 parse_seven_scenes_pose(const std::string& text, const std::string& name) {
-  const std::vector<double> v = parse_number_grid(text, name, 4, 4);
+  std::vector<int> lines;
+  const std::vector<double> v = parse_number_grid(text, name, 4, 4, &lines);
   Eigen::Matrix4d T;
   for (int r = 0; r < 4; ++r)
     for (int c = 0; c < 4; ++c) T(r, c) = v[size_t(r * 4 + c)];
+  // The TUM reader's physical bound (io/trajectory_io.h): a camera 1e308 m away is a corrupt file, and its
+  // coordinates would overflow every metric and plot range downstream.
+  for (int r = 0; r < 3; ++r)
+    if (!(std::fabs(T(r, 3)) <= kMaxCoordinateM))
+      throw ParseError(name, lines[size_t(r)], "expected a translation within 1e6 m (a physical bound), got " +
+                                                   number_for_message(T(r, 3)));
   if ((T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-6)
-    throw ParseError(name, 4, "expected the last row '0 0 0 1' of a rigid transform");
+    throw ParseError(name, lines[3], "expected the last row '0 0 0 1' of a rigid transform");
   const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
   const double orthonormality_error = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   if (!(orthonormality_error <= 1e-3) || !(R.determinant() > 0.0))
@@ -81,7 +94,8 @@ SE3 parse_seven_scenes_pose(const std::string& text, const std::string& name) {
 }
 
 PinholeCamera parse_seven_scenes_intrinsics(const std::string& text, const std::string& name, int width, int height) {
-  const std::vector<double> k = parse_number_grid(text, name, 3, 3);
+  std::vector<int> lines;
+  const std::vector<double> k = parse_number_grid(text, name, 3, 3, &lines);
   if (std::fabs(k[1]) > 1e-9 || std::fabs(k[3]) > 1e-9)
     throw ParseError(name, 0, "expected K without skew ('fx 0 cx / 0 fy cy / 0 0 1')");
   if (std::fabs(k[6]) > 1e-9 || std::fabs(k[7]) > 1e-9 || std::fabs(k[8] - 1.0) > 1e-9)
@@ -95,6 +109,7 @@ PinholeCamera parse_seven_scenes_intrinsics(const std::string& text, const std::
   c.cy = k[5];
   c.width = width;
   c.height = height;
+  check_camera_intrinsics(c, name, {{"fx", lines[0]}, {"cx", lines[0]}, {"fy", lines[1]}, {"cy", lines[1]}});
   return c;
 }
 

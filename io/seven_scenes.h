@@ -22,11 +22,13 @@
 namespace hf {
 
 // A 7-Scenes pose file: 4 lines of 4 numbers, the last line 0 0 0 1 (within 1e-6), a rotation block orthonormal
-// within 1e-3 with determinant +1 (re-orthonormalised by SE3::from_matrix). Throws hf::ParseError.
+// within 1e-3 with determinant +1 (re-orthonormalised by SE3::from_matrix), a translation within kMaxCoordinateM
+// (1e6 m, io/trajectory_io.h, as the TUM reader). Throws hf::ParseError "FILE:LINE: expected ...".
 SE3 parse_seven_scenes_pose(const std::string& text, const std::string& name_for_errors);
 
 // camera-intrinsics.txt: 3 lines of 3 numbers, K = [fx 0 cx; 0 fy cy; 0 0 1] (zeros within 1e-9, K22 = 1 within
-// 1e-9, fx, fy > 0). The file has no image size; the camera gets width x height. Throws hf::ParseError.
+// 1e-9, fx, fy > 0, within core/camera.h's check_camera_intrinsics bounds). The file has no image size; the camera
+// gets width x height. Throws hf::ParseError.
 PinholeCamera parse_seven_scenes_intrinsics(const std::string& text, const std::string& name_for_errors,
                                             int width = 640, int height = 480);
 

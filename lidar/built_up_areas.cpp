@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "core/error.h"
+#include "core/number_text.h"
 #include "core/progress.h"
 #include "io/las.h"
 #include "lidar/variant_dilation.h"
@@ -34,6 +35,16 @@ BuiltUp classify_built_up(const CellRaster& raster, const BuiltUpOptions& option
   return b;
 }
 
+namespace {
+
+// The inputs named in a message: the first file, and how many more.
+std::string files_for_message(const std::vector<std::string>& files) {
+  if (files.empty()) return "(no files)";
+  return files.size() == 1 ? files[0] : files[0] + " and " + std::to_string(files.size() - 1) + " more";
+}
+
+}  // namespace
+
 Grid grid_of_files(const std::vector<std::string>& files, double cell_m) {
   if (files.empty()) throw Error("no LAS input given");
   double lo[2] = {std::numeric_limits<double>::max(), std::numeric_limits<double>::max()};
@@ -48,11 +59,16 @@ Grid grid_of_files(const std::vector<std::string>& files, double cell_m) {
       lo[k] = std::min(lo[k], h.min[k]), hi[k] = std::max(hi[k], h.max[k]);
     }
   }
-  if (lo[0] > hi[0]) throw Error("the LAS inputs hold no points");
-  return grid_over(lo[0], lo[1], hi[0], hi[1], cell_m);
+  if (lo[0] > hi[0]) throw Error(files_for_message(files) + ": the LAS inputs hold no points");
+  try {
+    return grid_over(lo[0], lo[1], hi[0], hi[1], cell_m);
+  } catch (const Error& e) {
+    throw Error(files_for_message(files) + ": " + e.what());
+  }
 }
 
-CellRaster rasterise_files(const std::vector<std::string>& files, const Grid& grid, const PointClasses& classes, bool progress) {
+CellRaster rasterise_files(const std::vector<std::string>& files, const Grid& grid, const PointClasses& classes, bool progress,
+                           OutsideGrid outside) {
   CellRaster raster(grid);
   std::uint64_t total = 0;
   for (const std::string& f : files) total += LasReader(f).header().point_count;
@@ -62,10 +78,20 @@ CellRaster rasterise_files(const std::vector<std::string>& files, const Grid& gr
   std::vector<LasPoint> chunk;
   for (const std::string& f : files) {
     LasReader reader(f);
+    const std::uint64_t outside_before = raster.outside;
     while (reader.read_chunk(chunk, 1 << 18)) {
       raster.add(chunk, classes);
       done += chunk.size();
       if (bar) bar->update(static_cast<long>(done));
+    }
+    const std::uint64_t lost = raster.outside - outside_before;
+    if (outside == OutsideGrid::refuse && lost > 0) {
+      const LasHeader& h = reader.header();
+      throw Error(f + ": " + std::to_string(lost) + " of " + std::to_string(h.point_count) +
+                  " points lie outside the header's bounding box (x " + number_for_message(h.min[0]) + ".." +
+                  number_for_message(h.max[0]) + ", y " + number_for_message(h.min[1]) + ".." +
+                  number_for_message(h.max[1]) + "), so the grid built from it cannot hold them; the header is "
+                  "wrong: rewrite its box (e.g. `lasinfo -repair_bb`) and rerun");
     }
   }
   if (bar) bar->finish();

@@ -36,10 +36,18 @@ BuiltUp classify_built_up(const CellRaster& raster, const BuiltUpOptions& option
 // Re-runs psi and the profile for another t^S (the sensitivity analysis), reusing S, C_i and heights.
 void reclassify(BuiltUp& b, double t_s, const AreaThresholds& areas, double cell_m);
 
-// The grid over the union of the files' header bounding boxes (headers only are read).
+// The grid over the union of the files' header bounding boxes (headers only are read). Throws hf::Error naming the
+// files when the box is not valid or the grid too large (sizes printed short).
 Grid grid_of_files(const std::vector<std::string>& las_files, double cell_m);
-// Streams every file's points into a raster on `grid` (points outside it are skipped); `progress` draws a bar.
+
+// What rasterise_files does with a point outside `grid`: skip it (a tile's window), or refuse the file (a grid from
+// grid_of_files covers every header's box, so such a point proves its header's box wrong and the run would
+// silently lose it: "FILE: 14408 of 14410 points lie outside the header's bounding box ...").
+enum class OutsideGrid { skip, refuse };
+
+// Streams every file's points into a raster on `grid`; `progress` draws a bar. Throws hf::Error as LasReader, and
+// with OutsideGrid::refuse for a file with points outside the grid (counted over the whole file).
 CellRaster rasterise_files(const std::vector<std::string>& las_files, const Grid& grid, const PointClasses& classes,
-                           bool progress = false);
+                           bool progress = false, OutsideGrid outside = OutsideGrid::skip);
 
 }  // namespace hf::lidar

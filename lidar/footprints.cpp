@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "core/error.h"
+#include "core/regular_path.h"
 #include "lidar/gdal_errors.h"
 
 namespace hf::lidar {
@@ -28,7 +29,8 @@ void add_polygon(OGRGeometryH geometry, std::vector<Polygon>& out) {
 }  // namespace
 
 std::vector<Polygon> read_footprints(const std::string& path, const std::string& layer_name, const Grid* extent, int* skipped) {
-  if (!std::filesystem::exists(path)) throw Error(path + ": footprint file does not exist");
+  // GDAL opens the path itself and would block forever on a FIFO; folders stay allowed (shapefile folders).
+  require_regular_path(path, "footprint file", true);
   GDALAllRegister();
   const QuietGdal quiet;
   const std::unique_ptr<void, void (*)(GDALDatasetH)> ds(

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/number_text.h"
 
 namespace hf::lidar {
 
@@ -25,7 +26,8 @@ Grid grid_over(double min_x, double min_y, double max_x, double max_y, double ce
   const double i0 = std::floor(min_x / cell_m), i1 = std::floor(max_x / cell_m);
   const double j0 = std::floor(min_y / cell_m), j1 = std::floor(max_y / cell_m);
   const double w = i1 - i0 + 1, h = j1 - j0 + 1;
-  if (std::abs(i0) > 1e15 || std::abs(j1) > 1e15 || w * h > 2147483647.0) throw Error("grid: " + std::to_string(w) + " x " + std::to_string(h) + " cells is too many; tile the input");
+  if (std::abs(i0) > 1e15 || std::abs(j1) > 1e15 || w * h > 2147483647.0)
+    throw Error("grid: " + number_for_message(w) + " x " + number_for_message(h) + " cells is too many; tile the input");
   g.col0 = static_cast<std::int64_t>(i0);
   g.row0 = static_cast<std::int64_t>(j1) + 1;
   g.width = static_cast<int>(w);
@@ -58,7 +60,10 @@ void CellRaster::add(const std::vector<LasPoint>& pts, const PointClasses& class
     // Withheld points are not to be used; positions beyond any terrain (|z| > 1e6 m) are corrupt files.
     if (p.withheld || !std::isfinite(p.x) || !std::isfinite(p.y) || !(std::abs(p.z) <= 1e6)) continue;
     int c, r;
-    if (!grid.cell_of(p.x, p.y, c, r)) continue;
+    if (!grid.cell_of(p.x, p.y, c, r)) {
+      ++outside;
+      continue;
+    }
     ++points;
     const auto z = static_cast<float>(p.z);
     if (!any_points(c, r) || z < lowest_z(c, r)) lowest_z(c, r) = z;

@@ -57,6 +57,7 @@ struct CellRaster {
   Image<float> lowest_z;            // lowest point of any class (valid where any_points = 1)
   Image<std::uint8_t> any_points;
   std::uint64_t points = 0;         // points that fell in the grid
+  std::uint64_t outside = 0;        // usable points (not withheld, finite) that fell outside it
 
   CellRaster() = default;
   explicit CellRaster(const Grid& g);  // throws hf::Error beyond 4e8 cells (about 12 GB): tile such inputs

@@ -9,6 +9,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/regular_path.h"
 #include "io/las.h"
 
 namespace hf::lidar {
@@ -185,6 +186,7 @@ TileResult parse_header(Reader& r, std::int32_t& clusters) {
 }  // namespace
 
 TileResult read_tile_header(const std::string& path) {
+  require_regular_path(path, "tile file");  // the merge lists *.hflt names: a FIFO among them would block the open
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open tile file");
   std::string bytes(kHeaderBytes, '\0');
@@ -198,6 +200,7 @@ TileResult read_tile_header(const std::string& path) {
 }
 
 TileResult read_tile(const std::string& path) {
+  require_regular_path(path, "tile file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open tile file");
   std::ostringstream ss;

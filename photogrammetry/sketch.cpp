@@ -1,10 +1,12 @@
 #include "photogrammetry/sketch.h"
 
+#include <cmath>
 #include <nlohmann/json.hpp>
 #include <unordered_set>
 
 #include "core/bounded_read.h"
 #include "core/error.h"
+#include "core/number_text.h"
 
 namespace hf::photogrammetry {
 namespace {
@@ -29,7 +31,13 @@ SketchView parse_view(const json& v, const SketchPolygon& p, size_t k, const std
   for (const json& q : pts) {
     if (!q.is_array() || q.size() != 2 || !q[0].is_number() || !q[1].is_number())
       throw ParseError(file, 0, where(p, k) + "expected each point as [u, v] (two numbers)");
-    view.points.emplace_back(q[0].get<double>(), q[1].get<double>());
+    const Eigen::Vector2d point(q[0].get<double>(), q[1].get<double>());
+    // Checked before the self-intersection test, whose cross products overflow (1e308 read as an intersection).
+    if (!(std::fabs(point.x()) <= kMaxSketchPixel && std::fabs(point.y()) <= kMaxSketchPixel))
+      throw ParseError(file, 0, where(p, k) + "point " + std::to_string(view.points.size() + 1) + " (" +
+                                    number_for_message(point.x()) + ", " + number_for_message(point.y()) +
+                                    ") lies outside any image (beyond 1e6 px)");
+    view.points.push_back(point);
   }
   if (self_intersecting(view.points))
     throw ParseError(file, 0, where(p, k) + "the outline intersects itself (or repeats a vertex)");
@@ -102,7 +110,7 @@ void check_sketch_shots(const Sketch& sketch, const Network& network, const std:
                                       network.source);
       for (const Eigen::Vector2d& q : p.views[k].points)
         if (!network.shots[size_t(s)].in_image(q))
-          throw ParseError(file, 0, where(p, k) + "point (" + std::to_string(q.x()) + ", " + std::to_string(q.y()) +
+          throw ParseError(file, 0, where(p, k) + "point (" + number_for_message(q.x()) + ", " + number_for_message(q.y()) +
                                         ") lies outside the " + std::to_string(network.shots[size_t(s)].width) +
                                         "x" + std::to_string(network.shots[size_t(s)].height) + " image");
     }

@@ -25,6 +25,7 @@ namespace hf::photogrammetry {
 
 inline constexpr size_t kMaxSketchVertices = 1000;
 inline constexpr size_t kMaxSketchPolygons = 100000;
+inline constexpr double kMaxSketchPixel = 1e6;  // |u|, |v| beyond it lie outside any image: refused as read
 
 struct SketchView {
   std::string shot;

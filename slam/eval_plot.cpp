@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/number_text.h"
 #include "io/image_io.h"
 
 namespace hf {
@@ -20,6 +21,9 @@ const cv::Scalar kWhite(255, 255, 255), kBlack(0, 0, 0), kGrid(232, 232, 232), k
 constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
 constexpr int kShift = 4;  // sub-pixel bits for cv::line / cv::circle
 constexpr double kSub = 1 << kShift;
+// The largest coordinate a plot accepts: beyond any trajectory (the readers stop at 1e6 m), far below where the
+// pixel arithmetic (metres / metres-per-pixel, in doubles and then ints) loses its meaning.
+constexpr double kMaxPlotCoordinateM = 1e9;
 
 std::string format(double value, int decimals) {
   char buffer[64];
@@ -42,6 +46,17 @@ double nice_step(double raw) {
 }
 
 int decimals_for(double step) { return std::max(0, int(-std::floor(std::log10(step) + 1e-9))); }
+
+// The multiples of `step` in [lo, hi], computed from a count: a loop "v <= hi; v += step" never ends once hi is
+// inf, or once v is so large that v + step == v. Callers keep the range finite; the count is capped besides.
+std::vector<double> trajectory_plot_ticks(double lo, double hi, double step) {
+  std::vector<double> ticks;
+  const double first = std::ceil(lo / step), last = std::floor(hi / step);
+  if (!(std::isfinite(first) && std::isfinite(last)) || last < first) return ticks;
+  const double count = std::min(last - first + 1.0, 1000.0);  // nice_step gives about 7-15; never more than 1000
+  for (int k = 0; k < int(count); ++k) ticks.push_back((first + k) * step);
+  return ticks;
+}
 
 void text(cv::Mat& img, const std::string& s, cv::Point origin, double scale, const cv::Scalar& colour,
           int thickness = 1) {
@@ -109,6 +124,16 @@ ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, c
   const int ax0 = drop == 0 ? 1 : 0, ax1 = drop == 2 ? 1 : 2;
   const char* axis_names[] = {"x", "y", "z"};
 
+  // A position no camera reaches (or one that is not finite) would make every range below inf or meaningless.
+  auto check_drawable = [](const Eigen::Vector3d& p) {
+    const double far = p.allFinite() ? p.cwiseAbs().maxCoeff() : INFINITY;  // maxCoeff may skip a NaN
+    if (!(far <= kMaxPlotCoordinateM))
+      throw Error("trajectory plot: a position at " + number_for_message(far) +
+                  " m is beyond the 1e9 m a plot can show (is a pose corrupt?); not plotted");
+  };
+  for (const auto& p : gt_points) check_drawable(p);
+  for (const StampedPose& pose : aligned) check_drawable(pose.T_world_camera.translation());
+
   double lo0 = INFINITY, hi0 = -INFINITY, lo1 = INFINITY, hi1 = -INFINITY;
   auto extend = [&](const Eigen::Vector3d& p) {
     lo0 = std::min(lo0, p[ax0]);
@@ -124,6 +149,9 @@ ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, c
       extend(pose.T_world_camera.translation());
     }
   }
+  if (!(result.ate.error_m.max <= 2 * kMaxPlotCoordinateM))
+    throw Error("trajectory plot: the largest ATE error (" + number_for_message(result.ate.error_m.max) +
+                " m) is not a plottable range; not plotted");
   const double span = std::max({hi0 - lo0, hi1 - lo1, 1e-3});  // a still camera still gets a 1 mm window
   const double pad = 0.06 * span;
   lo0 -= pad, hi0 += pad, lo1 -= pad, hi1 += pad;
@@ -184,7 +212,7 @@ ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, c
   const double step = nice_step(std::max(hi0 - lo0, hi1 - lo1) / 7.0);
   const int decimals = decimals_for(step);
   const int tick_len = 6;
-  for (double v = std::ceil(lo0 / step) * step; v <= hi0; v += step) {
+  for (const double v : trajectory_plot_ticks(lo0, hi0, step)) {
     const int x = int(std::lround(area.x + (v - lo0) / m_per_px));
     cv::line(img, {x, area.y}, {x, area.y + area.height}, kGrid, 1);
     cv::line(img, {x, area.y + area.height}, {x, area.y + area.height + tick_len}, kAxis, 1);
@@ -192,7 +220,7 @@ ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, c
     const cv::Size s = text_size(label, font);
     text(img, label, {x - s.width / 2, area.y + area.height + tick_len + 6 + s.height}, font, kBlack);
   }
-  for (double v = std::ceil(lo1 / step) * step; v <= hi1; v += step) {
+  for (const double v : trajectory_plot_ticks(lo1, hi1, step)) {
     const int y = int(std::lround(area.y + area.height - (v - lo1) / m_per_px));
     cv::line(img, {area.x, y}, {area.x + area.width, y}, kGrid, 1);
     cv::line(img, {area.x - tick_len, y}, {area.x, y}, kAxis, 1);
@@ -270,7 +298,7 @@ ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, c
     cv::rectangle(img, cv::Rect(bar_x, bar_y, bar_w, bar_h), kAxis, 1);
     const double cstep = nice_step(colour_top / 5.0);
     const int cdec = decimals_for(cstep);
-    for (double v = 0.0; v <= colour_top * (1 + 1e-9); v += cstep) {
+    for (const double v : trajectory_plot_ticks(0.0, colour_top * (1 + 1e-9), cstep)) {
       const int y = int(std::lround(bar_y + bar_h - 1 - v / colour_top * (bar_h - 1)));
       cv::line(img, {bar_x + bar_w, y}, {bar_x + bar_w + tick_len, y}, kAxis, 1);
       const std::string label = format(v, cdec);

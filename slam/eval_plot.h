@@ -34,7 +34,9 @@ struct TrajectoryPlotOptions {
 };
 
 // Renders the plot of `result` (from evaluate_trajectory(gt, est) on these same trajectories) as RGB.
-// Throws hf::Error when the sizes or drop_axis are out of range or result's indices do not fit the trajectories.
+// Throws hf::Error when the sizes or drop_axis are out of range, result's indices do not fit the trajectories, or
+// a drawn position or the largest error is not finite or beyond 1e9 m (no plot of such a range means anything;
+// every loop here is bounded by a count, so no input can make it spin).
 ColorImage render_trajectory_plot(const Trajectory& gt, const Trajectory& est, const EvalResult& result,
                                   const TrajectoryPlotOptions& options = {});
 

@@ -345,7 +345,10 @@ nlohmann::json config_to_json(const PipelineConfig& config) {
   return j;
 }
 
-PipelineConfig config_from_json(const nlohmann::json& j, const std::string& where) {
+namespace {
+
+// config_from_json without the file name on every error; the wrapper below adds it where missing.
+PipelineConfig pipeline_config_from_json_unnamed(const nlohmann::json& j, const std::string& where) {
   if (!j.is_object()) throw Error(where + ": expected a JSON object");
   PipelineConfig c;
   FromJson f{&j, where};
@@ -394,12 +397,24 @@ PipelineConfig config_from_json(const nlohmann::json& j, const std::string& wher
       c.registration_options = r;
     }
   }
-  try {
-    c.validate();
-  } catch (const Error& e) {
-    throw Error(where + ": " + e.what());
-  }
+  c.validate();
   return c;
+}
+
+}  // namespace
+
+PipelineConfig config_from_json(const nlohmann::json& j, const std::string& where) {
+  // Every error names the file: the method's defaults are looked up (and an unknown method refused) before
+  // validate() runs, by code that does not know where the configuration came from.
+  try {
+    return pipeline_config_from_json_unnamed(j, where);
+  } catch (const ParseError&) {
+    throw;
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    if (message.rfind(where + ":", 0) == 0 || message.rfind(where + ".", 0) == 0) throw;
+    throw Error(where + ": " + message);
+  }
 }
 
 PipelineConfig load_config(const std::string& path) {

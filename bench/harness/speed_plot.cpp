@@ -16,6 +16,8 @@ namespace {
 const cv::Scalar kWhite(255, 255, 255), kBlack(0, 0, 0), kGrid(232, 232, 232), kAxis(90, 90, 90),
     kFront(50, 50, 50);  // dark grey front line and rings
 constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
+// The largest time (ms) or error (m) drawn: far beyond any real run, far below where ranges and logarithms overflow.
+constexpr double kMaxSpeedPlotValue = 1e12;
 
 // Distinct colours (BGR), after Tableau 10.
 const cv::Scalar kPalette[] = {{180, 119, 31}, {14, 127, 255}, {44, 160, 44},  {40, 39, 214},  {189, 103, 148},
@@ -91,8 +93,12 @@ struct Axis {
       }
       return t;
     }
+    // From a count, never "v <= hi; v += step": that loop spins when hi is inf or v + step == v.
     const double step = nice_step((hi - lo) / 6.0);
-    for (double v = std::ceil(lo / step) * step; v <= hi * (1 + 1e-12); v += step) {
+    const double first = std::ceil(lo / step), last = std::floor(hi * (1 + 1e-12) / step);
+    if (!(std::isfinite(first) && std::isfinite(last)) || last < first) return t;
+    for (int k = 0; k < int(std::min(last - first + 1.0, 1000.0)); ++k) {
+      const double v = (first + k) * step;
       t.push_back(std::abs(v) < 1e-12 * step ? 0.0 : v);
     }
     return t;
@@ -103,7 +109,9 @@ void dashed_line(cv::Mat& img, cv::Point2d a, cv::Point2d b, const cv::Scalar& c
   const double length = cv::norm(b - a), dash = 9.0, gap = 6.0;
   if (length < 1e-9) return;
   const cv::Point2d dir = (b - a) / length;
-  for (double s = 0.0; s < length; s += dash + gap) {
+  const int dashes = int(std::min(std::ceil(length / (dash + gap)), 100000.0));  // a count, not s += dash + gap
+  for (int k = 0; k < dashes; ++k) {
+    const double s = k * (dash + gap);
     const cv::Point2d p = a + dir * s, q = a + dir * std::min(length, s + dash);
     cv::line(img, cv::Point(int(std::lround(p.x)), int(std::lround(p.y))),
              cv::Point(int(std::lround(q.x)), int(std::lround(q.y))), colour, width, cv::LINE_AA);
@@ -120,7 +128,9 @@ ColorImage render_speed_plot(const std::vector<SpeedPoint>& points, const SpeedP
   std::vector<SpeedPoint> pts;
   std::vector<std::string> not_plotted = options.not_plotted;
   for (const SpeedPoint& p : points) {
-    if (std::isfinite(p.ms_per_frame) && std::isfinite(p.ate_m) && p.ms_per_frame > 0.0 && p.ate_m >= 0.0) {
+    // Beyond kMaxSpeedPlotValue the axis ranges (padded by x1.4) overflow: such a point is listed, not drawn.
+    if (std::isfinite(p.ms_per_frame) && std::isfinite(p.ate_m) && p.ms_per_frame > 0.0 && p.ate_m >= 0.0 &&
+        p.ms_per_frame <= kMaxSpeedPlotValue && p.ate_m <= kMaxSpeedPlotValue) {
       pts.push_back(p);
     } else {
       not_plotted.push_back(p.label);

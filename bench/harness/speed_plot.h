@@ -1,8 +1,8 @@
 // speed_vs_error.png: one labelled point per method, milliseconds per frame on x and ATE RMSE on y (both lower is
 // better, so the best corner is the lower left), the Pareto front joined by a dashed step line and its points
 // ringed. An axis is logarithmic when its data span more than a factor of 10, else linear. Peers are drawn as
-// squares, hashfusion methods as discs. Methods without a comparable ATE are listed under the plot as "not
-// plotted". Drawn with OpenCV in the style of slam/eval_plot.cpp.
+// squares, hashfusion methods as discs. Methods without a comparable ATE (or with a time or error beyond 1e12, no
+// plottable range) are listed under the plot as "not plotted"; every tick and dash loop is bounded by a count. Drawn with OpenCV in the style of slam/eval_plot.cpp.
 // Thread-safety: pure functions. Failures: hf::Error (size out of range, a file that cannot be written).
 #pragma once
 

@@ -75,7 +75,7 @@ py::dict lidar_classify(const py::object& las, const py::object& points, const p
     lidar::CellRaster raster;
     if (!files.empty()) {
       grid = lidar::grid_of_files(files, o.cell_m);
-      raster = lidar::rasterise_files(files, grid, o.classes);
+      raster = lidar::rasterise_files(files, grid, o.classes, false, lidar::OutsideGrid::refuse);
     } else {
       double x0 = cloud[0].x, y0 = cloud[0].y, x1 = x0, y1 = y0;
       for (const LasPoint& p : cloud)

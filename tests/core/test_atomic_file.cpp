@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "core/error.h"
+#include "core/output_transaction.h"
 
 namespace hf {
 namespace {
@@ -218,6 +219,64 @@ TEST_F(AtomicFile, SwapFolderReplacesTheOldOneWithoutFollowingLinks) {
   }
   EXPECT_EQ(read(keep / "precious.txt"), "precious");
   EXPECT_EQ(files_in_dir(), 2u) << "keep and results, nothing left behind";
+}
+
+// Issue 35: outputs as one transaction. Files the previous run wrote are replaced or dropped, every other entry of
+// the old folder (files, folders, links) is carried over; nothing changes before commit().
+TEST_F(AtomicFile, TransactionCarriesOverWhatThePreviousRunDidNotWrite) {
+  const fs::path out = dir_ / "out";
+  fs::create_directories(out / "sub");
+  std::ofstream(out / "report.json") << "old";
+  std::ofstream(out / "trajectory.png") << "old plot";
+  std::ofstream(out / "notes.txt") << "mine";
+  std::ofstream(out / "sub" / "deep.txt") << "deep";
+  fs::create_symlink("/nonexistent", out / "link");
+  {
+    OutputTransaction t(out.string());
+    EXPECT_EQ(fs::path(t.folder()).parent_path(), dir_);
+    std::ofstream(fs::path(t.folder()) / "report.json") << "new";
+    EXPECT_EQ(read(out / "report.json"), "old");  // nothing visible before the commit
+    t.commit([](const std::string& name) { return name == "report.json" || name == "trajectory.png"; });
+  }
+  EXPECT_EQ(read(out / "report.json"), "new");
+  EXPECT_FALSE(fs::exists(out / "trajectory.png"));  // the previous run's, and this run did not write it
+  EXPECT_EQ(read(out / "notes.txt"), "mine");
+  EXPECT_EQ(read(out / "sub" / "deep.txt"), "deep");
+  EXPECT_TRUE(fs::is_symlink(out / "link"));
+  EXPECT_EQ(files_in_dir(), 2u) << "only out and its lock file remain";  // no private folder left
+  EXPECT_TRUE(fs::exists(dir_ / ".out.lock"));
+}
+
+TEST_F(AtomicFile, TransactionWithoutCommitLeavesOutAsItWas) {
+  const fs::path out = dir_ / "out";
+  {
+    OutputTransaction t(out.string());
+    std::ofstream(fs::path(t.folder()) / "report.json") << "half";
+  }
+  EXPECT_FALSE(fs::exists(out)) << "an absent --out stays absent";
+  fs::create_directories(out);
+  std::ofstream(out / "report.json") << "old";
+  { OutputTransaction t(out.string()); }
+  EXPECT_EQ(read(out / "report.json"), "old");
+  EXPECT_EQ(files_in_dir(), 2u);
+}
+
+TEST_F(AtomicFile, TransactionIsExclusiveAndCleansUpAfterDeadRuns) {
+  const fs::path out = dir_ / "out";
+  fs::create_directories(dir_ / ".out.run-abc123" / "x");  // what a run killed with SIGKILL leaves
+  OutputTransaction first(out.string());
+  EXPECT_FALSE(fs::exists(dir_ / ".out.run-abc123"));
+  try {
+    OutputTransaction second(out.string());
+    ADD_FAILURE() << "a second transaction on the same folder was allowed";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("in use by another run (pid " + std::to_string(::getpid()) + "; lock "),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_TRUE(fs::exists(first.folder())) << "the refused second transaction removed the first one's folder";
+  std::ofstream(dir_ / "afile") << "x";
+  EXPECT_THROW(OutputTransaction((dir_ / "afile").string()), Error);
 }
 
 }  // namespace

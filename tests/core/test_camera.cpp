@@ -140,7 +140,7 @@ TEST(CameraFile, ErrorsNameFileAndLine) {
   EXPECT_EQ(error_of("fx 500 501\n", "k.txt").rfind("k.txt:1: expected", 0), 0u);
   EXPECT_EQ(error_of("fx nan\n", "k.txt").rfind("k.txt:1: expected", 0), 0u);
   EXPECT_NE(error_of("fx 500\nfy 500\ncx 1\ncy 2\nwidth 640\n", "k.txt").find("missing 'height'"), std::string::npos);
-  EXPECT_NE(error_of("fx -5\nfy 500\ncx 1\ncy 2\nwidth 640\nheight 480\n", "k.txt").find("k.txt: expected"),
+  EXPECT_NE(error_of("fx -5\nfy 500\ncx 1\ncy 2\nwidth 640\nheight 480\n", "k.txt").find("k.txt:1: expected fx"),
             std::string::npos);
   EXPECT_NE(error_of("fx 5\nfy 500\ncx 1\ncy 2\nwidth 0\nheight 480\n", "k.txt").find("k.txt: expected"),
             std::string::npos);
@@ -148,6 +148,24 @@ TEST(CameraFile, ErrorsNameFileAndLine) {
             std::string::npos);
   EXPECT_NE(error_of("", "empty.txt").find("empty.txt"), std::string::npos);
   EXPECT_NE(error_of(R"({"fx": "500"})", "c.json").find("c.json"), std::string::npos);
+}
+
+// Issue 35: finite but absurd intrinsics, unknown JSON keys and repeated keys are refused at their line.
+TEST(CameraFile, BoundsUnknownAndRepeatedKeysNamed) {
+  const std::string tail = "cx 320\ncy 240\nwidth 640\nheight 480\n";
+  // 640 px wide: focal lengths 0.0437 * 640 = 27.97 .. 114.6 * 640 = 73344 px (fields of view 170 .. 0.5 degrees).
+  EXPECT_EQ(error_of("fx 1e-300\nfy 500\n" + tail, "k.txt"),
+            "k.txt:1: expected fx within 27.968..73344 px (fields of view 0.5..170 degrees over 640 px), got 1e-300");
+  EXPECT_EQ(error_of("fy 500\nfx 1e300\n" + tail, "k.txt").rfind("k.txt:2: expected fx within", 0), 0u);
+  EXPECT_EQ(error_of("fx 500\nfy 500\ncx 1e9\ncy 240\nwidth 640\nheight 480\n", "k.txt"),
+            "k.txt:3: expected cx within -640..1280 px (the principal point near the image), got 1e+09");
+  EXPECT_NO_THROW(PinholeCamera::parse("fx 28\nfy 21\n" + tail, "k.txt"));     // just inside: 169.7 degrees
+  EXPECT_NO_THROW(PinholeCamera::parse("fx 73000\nfy 500\n" + tail, "k.txt"));  // 0.5 degrees
+  EXPECT_EQ(error_of("fx 500\nfy 500\nfx 1\n" + tail, "k.txt"), "k.txt:3: 'fx' given twice (first on line 1)");
+  const std::string json = "{\"fx\": 500, \"fy\": 500, \"cx\": 320, \"cy\": 240,\n \"k1\": 0.1, \"width\": 640, \"height\": 480}";
+  EXPECT_EQ(error_of(json, "c.json"), "c.json:2: expected only the keys fx fy cx cy width height, got 'k1'");
+  const std::string json_far = "{\"fx\": 500,\n\"fy\": 1e300, \"cx\": 320, \"cy\": 240, \"width\": 640, \"height\": 480}";
+  EXPECT_EQ(error_of(json_far, "c.json").rfind("c.json:2: expected fy within", 0), 0u) << error_of(json_far, "c.json");
 }
 
 TEST(CameraFile, SaveLoadRoundTripAndMissingFile) {

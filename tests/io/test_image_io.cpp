@@ -14,6 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/error.h"
+#include "io/image_header.h"
 #include "tests/io/test_dataset_util.h"
 
 namespace fs = std::filesystem;
@@ -230,4 +231,47 @@ TEST(ImageIo, FifoIsRefusedAndWritersIgnoreTheName) {
   in.read(magic, 4);
   EXPECT_EQ(std::string(magic + 1, 3), "PNG");
   EXPECT_EQ(hf::load_color(no_ext)(2, 1).b, 3);
+}
+
+namespace {
+
+// The bytes of an 8x6 image of `type` encoded as `ext` by OpenCV.
+std::string encoded_8x6(const std::string& ext, int type) {
+  std::vector<unsigned char> bytes;
+  EXPECT_TRUE(cv::imencode(ext, cv::Mat(6, 8, type, cv::Scalar::all(100)), bytes));
+  return std::string(bytes.begin(), bytes.end());
+}
+
+}  // namespace
+
+// Issue 35: a small file whose header promises a huge image is refused from its header, before any decoding.
+TEST(ImageIo, HeaderSizeCheckedBeforeDecoding) {
+  for (const char* ext : {".png", ".jpg", ".tiff", ".bmp"}) {
+    const std::optional<hf::ImageHeaderSize> size = hf::image_header_size(encoded_8x6(ext, CV_8UC3));
+    ASSERT_TRUE(size.has_value()) << ext;
+    EXPECT_EQ(size->width, 8u) << ext;
+    EXPECT_EQ(size->height, 6u) << ext;
+  }
+  EXPECT_FALSE(hf::image_header_size("\x89PNG\r\n\x1a\n").has_value());  // too short to say
+  EXPECT_FALSE(hf::image_header_size(std::string("\xff\xd8\xff\xe0\x00\x01", 6)).has_value());  // bad length
+
+  // An 8x6 16-bit PNG whose IHDR is rewritten to 20000x20000 (the CRC no longer matches: never looked at).
+  TempDir dir("image_header");
+  std::string bomb = encoded_8x6(".png", CV_16UC1);
+  for (int k = 0; k < 2; ++k) {
+    const std::uint32_t v = 20000;
+    for (int b = 0; b < 4; ++b) bomb[size_t(16 + 4 * k + b)] = char((v >> (24 - 8 * b)) & 0xff);
+  }
+  const std::string path = dir / "bomb.png";
+  std::ofstream(path, std::ios::binary) << bomb;
+  EXPECT_EQ(error_of([&] { hf::load_depth(path, {}, {640, 480}); }),
+            path + ": depth image is 20000x20000 (its PNG IHDR) but the camera is 640x480; not decoded");
+  EXPECT_EQ(error_of([&] { hf::load_depth(path); }),
+            path + ": depth image is 20000x20000 (its PNG IHDR), more than the 67108864-pixel limit; not decoded");
+  // The expected size passes and the image decodes as before.
+  const std::string good = dir / "good.png";
+  std::ofstream(good, std::ios::binary) << encoded_8x6(".png", CV_16UC1);
+  EXPECT_EQ(hf::load_depth(good, {}, {8, 6}).width(), 8);
+  EXPECT_NE(error_of([&] { hf::load_color(good, {640, 480}); }).find("colour image is 8x6 (its PNG IHDR) but the camera"),
+            std::string::npos);
 }

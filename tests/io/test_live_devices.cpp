@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <thread>
+#include <unistd.h>
 
 #include "core/error.h"
 #include "io/live_input.h"
@@ -128,6 +129,12 @@ TEST(OpenNi2Capture, OpenErrorsSayWhatWasAskedAndWhatExists) {
   EXPECT_NE(open_error("openni2://no-such-device").find("openni2://no-such-device: cannot open"), std::string::npos);
   EXPECT_NE(open_error("openni2://no-such-device").find("OpenNI2 sees: "), std::string::npos);
   EXPECT_EQ(open_error("/no/such/take.oni"), "/no/such/take.oni: no such recording (.oni file)");
+  // Issue 35: a folder or a device with the .oni name says what it is instead of "no such recording".
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / ("hf_take_" + std::to_string(::getpid()) + ".oni");
+  std::filesystem::create_directories(folder);
+  EXPECT_EQ(open_error(folder.string()),
+            folder.string() + ": cannot read recording (.oni file): it is a folder, not a regular file");
+  std::filesystem::remove(folder);
   const std::string mode = open_error("openni2://Dummy", hf::live_input_options("640x480@30", ""));
   EXPECT_NE(mode.find("openni2://Dummy: no depth mode at 640x480; the device has 320x240@30 depth 1 mm"),
             std::string::npos)

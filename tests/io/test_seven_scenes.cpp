@@ -56,6 +56,9 @@ TEST(SevenScenesText, MalformedPosesNameFileAndLine) {
       {"2 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "expected a rotation"},
       {"-1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "expected a rotation"},  // a reflection
       {"", "expected 4 lines of 4 numbers, got 0"},
+      // Issue 35: a finite but absurd translation hung the trajectory plot; the TUM reader's 1e6 m bound, at its line.
+      {"1 0 0 0\n\n0 1 0 1e308\n0 0 1 0\n0 0 0 1\n", "p.txt:3: expected a translation within 1e6 m (a physical bound), got 1e+308"},
+      {"1 0 0 -1000001\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "p.txt:1: expected a translation within 1e6 m"},
   };
   for (const Case& c : cases) EXPECT_TRUE(contains(error_of([&] { hf::parse_seven_scenes_pose(c.text, "p.txt"); }), c.expect)) << c.text;
 }
@@ -69,6 +72,11 @@ TEST(SevenScenesText, Intrinsics) {
   EXPECT_TRUE(contains(error_of([] { hf::parse_seven_scenes_intrinsics("500 0 100\n0 510 80\n0 0 2", "k"); }), "k:3:"));
   EXPECT_TRUE(contains(error_of([] { hf::parse_seven_scenes_intrinsics("-5 0 100\n0 510 80\n0 0 1", "k"); }), "positive"));
   EXPECT_TRUE(contains(error_of([] { hf::parse_seven_scenes_intrinsics("500 0 100\n0 510 80", "k"); }), "got 2"));
+  // Issue 35: finite but absurd focal lengths are refused at their line (640 px: 27.968..73344 px).
+  EXPECT_TRUE(contains(error_of([] { hf::parse_seven_scenes_intrinsics("1e300 0 320\n0 585 240\n0 0 1", "k"); }),
+                       "k:1: expected fx within 27.968..73344 px"));
+  EXPECT_TRUE(contains(error_of([] { hf::parse_seven_scenes_intrinsics("585 0 320\n0 1e-300 240\n0 0 1", "k"); }),
+                       "k:2: expected fy within"));
 }
 
 namespace {

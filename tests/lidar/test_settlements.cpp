@@ -4,8 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 
+#include "core/error.h"
 #include "io/las.h"
 #include "lidar/built_up_areas.h"
 #include "lidar/connected_components.h"
@@ -131,6 +134,44 @@ TEST(SyntheticSettlements, ThroughALasFile) {
   std::filesystem::remove_all(dir);
   const BuiltUp b = classify_built_up(raster, settlements_options_for(scene, scene.t_s));
   EXPECT_DOUBLE_EQ(compare_classes(b.profile.classes, scene.classes).mean_f1, 1.0);
+}
+
+// Issue 35: a header whose box leaves points out gave exit 0 and an empty classification; the points are counted
+// and the file refused, naming it, with the count and the box printed short.
+TEST(Settlements, HeaderBoxThatLeavesPointsOutIsRefused) {
+  const SyntheticSettlements scene = synthetic_settlements({1.0, 5});
+  const auto dir = std::filesystem::temp_directory_path() / ("hf_lidar_box_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "lying.las").string();
+  LasHeader h;
+  h.version_minor = 4, h.point_format = 6;
+  h.scale[0] = h.scale[1] = h.scale[2] = 0.001;
+  std::string bytes = format_las(h, scene.points, path);
+  double min_x = 0, min_y = 0;
+  std::memcpy(&min_x, &bytes[187], 8);
+  std::memcpy(&min_y, &bytes[203], 8);
+  const double max_x = min_x + 1.5, max_y = min_y + 1.5;  // a 2x2-cell box at the lower left corner
+  std::memcpy(&bytes[179], &max_x, 8);
+  std::memcpy(&bytes[195], &max_y, 8);
+  std::ofstream(path, std::ios::binary) << bytes;
+  const Grid grid = grid_of_files({path}, 1.0);
+  EXPECT_LE(grid.width * grid.height, 9);
+  std::string message;
+  try {
+    rasterise_files({path}, grid, {}, false, OutsideGrid::refuse);
+  } catch (const Error& e) {
+    message = e.what();
+  }
+  const CellRaster skipped = rasterise_files({path}, grid, {});  // a tile's window: outside points are not an error
+  std::filesystem::remove_all(dir);
+  EXPECT_EQ(message.rfind(path + ": " + std::to_string(skipped.outside) + " of " + std::to_string(scene.points.size()) +
+                              " points lie outside the header's bounding box (x ",
+                          0),
+            0u)
+      << message;
+  EXPECT_GT(skipped.outside, scene.points.size() / 2);
+  EXPECT_EQ(skipped.points + skipped.outside, scene.points.size());  // the synthetic scene withholds none
+  EXPECT_LT(message.size(), 400u) << message;
 }
 
 }  // namespace

@@ -64,6 +64,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       for (const auto& v : p.views)
         if (v.points.size() != p.views[0].points.size() || v.points.size() < 3 || pg::self_intersecting(v.points))
           std::abort();
+      for (const auto& v : p.views)  // issue 35: every point within the stated bound
+        for (const auto& q : v.points)
+          if (!(std::abs(q.x()) <= pg::kMaxSketchPixel && std::abs(q.y()) <= pg::kMaxSketchPixel)) std::abort();
     }
   });
   hf::fuzz::check_long_first_line_refused(text, [](const std::string& t) {

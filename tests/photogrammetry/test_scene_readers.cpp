@@ -195,6 +195,9 @@ TEST(Sketch, ParsesAndChecksStructure) {
             "s.json: polygon 'p': \"same_plane_as\" 'q' names no polygon listed before this one");
   EXPECT_EQ(bad(R"({"polygons": [{"id": "p", "views": [{"shot": "a", "points": [[0,0],[1,0]]}]}]})"),
             "s.json: polygon 'p' view 1: expected 3 to 1000 points, got 2");
+  // Issue 35: a far point is outside every image, not a self-intersection (the cross products overflowed).
+  EXPECT_EQ(bad(R"({"polygons": [{"id": "p", "views": [{"shot": "a", "points": [[0,0],[1e308,1e308],[1,0]]}]}]})"),
+            "s.json: polygon 'p' view 1: point 2 (1e+308, 1e+308) lies outside any image (beyond 1e6 px)");
   Network n;
   n.source = "net";
   n.shots.push_back(testing::look_at("a.png", {0, -5, 0}, {0, 0, 0}, 500, 20, 20));
@@ -202,7 +205,7 @@ TEST(Sketch, ParsesAndChecksStructure) {
             "s.json: polygon 'p0' view 2: no shot named 'b.png' in net");
   n.shots.push_back(testing::look_at("b.png", {1, -5, 0}, {0, 0, 0}, 500, 11, 11));
   EXPECT_EQ(error_of([&] { check_sketch_shots(s, n, "s.json"); }),
-            "s.json: polygon 'p0' view 2: point (11.000000, 0.000000) lies outside the 11x11 image");
+            "s.json: polygon 'p0' view 2: point (11, 0) lies outside the 11x11 image");
 }
 
 TEST(SharedData, SceauxReadsTenPresentShotsAndTheSparseCloud) {

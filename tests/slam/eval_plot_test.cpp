@@ -63,6 +63,29 @@ TEST(TrajectoryPlot, DrawsGroundTruthEstimateAndColourBar) {
             img.width() * img.height() / 2);
 }
 
+// Issue 35: a pose at 1e308 m made the tick loops ("v <= hi; v += step" with hi = inf) spin forever. Positions
+// beyond 1e9 m are refused with a message; far but plottable ones (5e8 m) still render, with a bounded tick count.
+TEST(TrajectoryPlot, AbsurdRangesRefusedFarOnesRendered) {
+  const Trajectory gt = circle(1.0, 0.0);
+  const EvalResult r = evaluate_trajectory(gt, gt);
+  for (const double far : {1e308, -1e10, double(NAN)}) {
+    Trajectory bad = gt;
+    bad[60].T_world_camera = SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(far, 0, 0));
+    try {
+      render_trajectory_plot(bad, gt, r);
+      ADD_FAILURE() << "a position at " << far << " m was plotted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("beyond the 1e9 m a plot can show"), std::string::npos) << e.what();
+    }
+  }
+  Trajectory shifted = gt;  // a 1 m circle 5e8 m from the origin: doubles still resolve 1e-7 m there
+  for (StampedPose& p : shifted)
+    p.T_world_camera = SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(5e8, 0, 0)) * p.T_world_camera;
+  const EvalResult far = evaluate_trajectory(shifted, shifted);
+  const ColorImage img = render_trajectory_plot(shifted, shifted, far, sized(900, 700));
+  EXPECT_GT(count_pixels(img, [](const Rgb8& p) { return p.r < 40 && p.g < 40 && p.b < 40; }), 2000);
+}
+
 TEST(TrajectoryPlot, WritesAPngAtomicallyAndReportsBadPaths) {
   const Trajectory gt = circle(1.0, 0.0);
   const EvalResult r = evaluate_trajectory(gt, gt);  // zero error: the colour bar still has a range

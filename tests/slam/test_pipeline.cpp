@@ -362,6 +362,13 @@ TEST(PipelineConfig, JsonRoundTripAndErrors) {
   EXPECT_EQ(capacity.find("18446744073709551615"), std::string::npos) << capacity;
   EXPECT_NE(error_of({{"registration_options", {{"robust_icp", "cauchy"}}}}).find("unknown robust kernel"),
             std::string::npos);
+  // Issue 35: an unknown method beside registration_options (a report.json's config) names the file too, and a
+  // voxel no sensor resolves is refused instead of losing every frame to a full pool.
+  const std::string bogus = error_of({{"registration", "bogus"}, {"registration_options", nlohmann::json::object()}});
+  EXPECT_EQ(bogus.rfind("cfg.json: ", 0), 0u) << bogus;
+  EXPECT_NE(bogus.find("bogus"), std::string::npos) << bogus;
+  EXPECT_NE(error_of({{"volume", {{"voxel_m", 1e-9}}}}).find("voxel_m must be in [0.0001, 10] metres, got 1e-09"),
+            std::string::npos) << error_of({{"volume", {{"voxel_m", 1e-9}}}});
 }
 
 TEST(PipelineConfig, FileErrorsNameFileAndLine) {
