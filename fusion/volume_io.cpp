@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <ostream>
@@ -160,7 +161,10 @@ Volume parse_volume(std::string_view bytes, const std::string& name) {
 }
 
 Volume load_volume(const std::string& path) {
-  require_regular_path(path, "volume file");  // an ifstream on a FIFO or device blocks or reads endlessly
+  // An ifstream on a FIFO or device blocks or reads endlessly; a missing file stays the ParseError below.
+  std::error_code ec;
+  if (std::filesystem::status(path, ec).type() != std::filesystem::file_type::not_found)
+    require_regular_path(path, "volume file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ParseError(path, 0, "expected a readable hashfusion volume file (cannot open it)");
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
