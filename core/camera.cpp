@@ -51,9 +51,10 @@ void check_camera_intrinsics(const PinholeCamera& c, const std::string& file, co
   };
   auto centre = [&](const char* key, double v, int size) {
     if (!(v >= -size && v <= 2.0 * size))
-      throw ParseError(file, line(key), std::string("expected ") + key + " within " + std::to_string(-size) + ".." +
-                                            std::to_string(2 * size) + " px (the principal point near the image), got " +
-                                            number_for_message(v));
+      throw ParseError(file, line(key),
+                       std::string("expected ") + key + " within " + std::to_string(-size) + ".." +
+                           std::to_string(2 * size) + " px (the principal point near the image), got " +
+                           number_for_message(v));
   };
   focal("fx", c.fx, c.width);
   focal("fy", c.fy, c.height);

@@ -4,7 +4,6 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <ostream>
@@ -161,10 +160,14 @@ Volume parse_volume(std::string_view bytes, const std::string& name) {
 }
 
 Volume load_volume(const std::string& path) {
-  // An ifstream on a FIFO or device blocks or reads endlessly; a missing file stays the ParseError below.
-  std::error_code ec;
-  if (std::filesystem::status(path, ec).type() != std::filesystem::file_type::not_found)
+  // An ifstream on a FIFO or device blocks or reads endlessly; the refusal keeps load_volume's ParseError contract.
+  try {
     require_regular_path(path, "volume file");
+  } catch (const Error& e) {
+    const std::string why = e.what();
+    throw ParseError(path, 0, "expected a readable hashfusion volume file (" +
+                                  (why.rfind(path + ": ", 0) == 0 ? why.substr(path.size() + 2) : why) + ")");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ParseError(path, 0, "expected a readable hashfusion volume file (cannot open it)");
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -116,7 +116,9 @@ cv::Mat read_image(const std::string& path, const char* what, const ExpectedImag
   if (const std::optional<ImageHeaderSize> size = image_header_size(bytes)) {
     const std::string stated = std::string(what) + " image is " + std::to_string(size->width) + "x" +
                                std::to_string(size->height) + " (its " + size->source + ")";
-    if (expected.width > 0 && (size->width != std::uint32_t(expected.width) || size->height != std::uint32_t(expected.height)))
+    const bool other_size =
+        size->width != std::uint32_t(expected.width) || size->height != std::uint32_t(expected.height);
+    if (expected.width > 0 && other_size)
       throw Error(path + ": " + stated + " but the camera is " + std::to_string(expected.width) + "x" +
                   std::to_string(expected.height) + "; not decoded");
     if (double(size->width) * double(size->height) > double(kMaxImagePixels))

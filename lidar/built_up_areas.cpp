@@ -67,8 +67,8 @@ Grid grid_of_files(const std::vector<std::string>& files, double cell_m) {
   }
 }
 
-CellRaster rasterise_files(const std::vector<std::string>& files, const Grid& grid, const PointClasses& classes, bool progress,
-                           OutsideGrid outside) {
+CellRaster rasterise_files(const std::vector<std::string>& files, const Grid& grid, const PointClasses& classes,
+                           bool progress, OutsideGrid outside) {
   CellRaster raster(grid);
   std::uint64_t total = 0;
   for (const std::string& f : files) total += LasReader(f).header().point_count;

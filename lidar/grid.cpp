@@ -27,7 +27,8 @@ Grid grid_over(double min_x, double min_y, double max_x, double max_y, double ce
   const double j0 = std::floor(min_y / cell_m), j1 = std::floor(max_y / cell_m);
   const double w = i1 - i0 + 1, h = j1 - j0 + 1;
   if (std::abs(i0) > 1e15 || std::abs(j1) > 1e15 || w * h > 2147483647.0)
-    throw Error("grid: " + number_for_message(w) + " x " + number_for_message(h) + " cells is too many; tile the input");
+    throw Error("grid: " + number_for_message(w) + " x " + number_for_message(h) +
+                " cells is too many; tile the input");
   g.col0 = static_cast<std::int64_t>(i0);
   g.row0 = static_cast<std::int64_t>(j1) + 1;
   g.width = static_cast<int>(w);

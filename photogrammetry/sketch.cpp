@@ -110,7 +110,8 @@ void check_sketch_shots(const Sketch& sketch, const Network& network, const std:
                                       network.source);
       for (const Eigen::Vector2d& q : p.views[k].points)
         if (!network.shots[size_t(s)].in_image(q))
-          throw ParseError(file, 0, where(p, k) + "point (" + number_for_message(q.x()) + ", " + number_for_message(q.y()) +
+          throw ParseError(file, 0, where(p, k) + "point (" + number_for_message(q.x()) + ", " +
+                                        number_for_message(q.y()) +
                                         ") lies outside the " + std::to_string(network.shots[size_t(s)].width) +
                                         "x" + std::to_string(network.shots[size_t(s)].height) + " image");
     }

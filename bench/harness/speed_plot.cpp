@@ -107,7 +107,7 @@ struct Axis {
 
 void dashed_line(cv::Mat& img, cv::Point2d a, cv::Point2d b, const cv::Scalar& colour, int width) {
   const double length = cv::norm(b - a), dash = 9.0, gap = 6.0;
-  if (length < 1e-9) return;
+  if (!(length >= 1e-9 && length <= 1e7)) return;  // a NaN or absurd length would make the dash count undefined
   const cv::Point2d dir = (b - a) / length;
   const int dashes = int(std::min(std::ceil(length / (dash + gap)), 100000.0));  // a count, not s += dash + gap
   for (int k = 0; k < dashes; ++k) {

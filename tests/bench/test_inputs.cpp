@@ -145,7 +145,8 @@ TEST(BenchSpeedPlot, DrawsPointsFrontAndLabels) {
   EXPECT_NO_THROW(render_speed_plot({}, o));
   EXPECT_NO_THROW(render_speed_plot({{"one", 3.0, 0.0, false}}, o));
   // Issue 35: absurd but finite values are listed as not plotted instead of overflowing the axis ranges.
-  EXPECT_NO_THROW(render_speed_plot({{"one", 3.0, 0.01, false}, {"far", 1e308, 1e308, false}, {"tiny", 5e-324, 0.02, true}}, o));
+  EXPECT_NO_THROW(render_speed_plot(
+      {{"one", 3.0, 0.01, false}, {"far", 1e308, 1e308, false}, {"tiny", 5e-324, 0.02, true}}, o));
   o.width_px = 100;
   EXPECT_THROW(render_speed_plot(pts, o), Error);
 

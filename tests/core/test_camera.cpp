@@ -162,9 +162,11 @@ TEST(CameraFile, BoundsUnknownAndRepeatedKeysNamed) {
   EXPECT_NO_THROW(PinholeCamera::parse("fx 28\nfy 21\n" + tail, "k.txt"));     // just inside: 169.7 degrees
   EXPECT_NO_THROW(PinholeCamera::parse("fx 73000\nfy 500\n" + tail, "k.txt"));  // 0.5 degrees
   EXPECT_EQ(error_of("fx 500\nfy 500\nfx 1\n" + tail, "k.txt"), "k.txt:3: 'fx' given twice (first on line 1)");
-  const std::string json = "{\"fx\": 500, \"fy\": 500, \"cx\": 320, \"cy\": 240,\n \"k1\": 0.1, \"width\": 640, \"height\": 480}";
+  const std::string json =
+      "{\"fx\": 500, \"fy\": 500, \"cx\": 320, \"cy\": 240,\n \"k1\": 0.1, \"width\": 640, \"height\": 480}";
   EXPECT_EQ(error_of(json, "c.json"), "c.json:2: expected only the keys fx fy cx cy width height, got 'k1'");
-  const std::string json_far = "{\"fx\": 500,\n\"fy\": 1e300, \"cx\": 320, \"cy\": 240, \"width\": 640, \"height\": 480}";
+  const std::string json_far =
+      "{\"fx\": 500,\n\"fy\": 1e300, \"cx\": 320, \"cy\": 240, \"width\": 640, \"height\": 480}";
   EXPECT_EQ(error_of(json_far, "c.json").rfind("c.json:2: expected fy within", 0), 0u) << error_of(json_far, "c.json");
 }
 

@@ -1,6 +1,7 @@
 #include "fusion/volume_io.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cstring>
 #include <filesystem>
@@ -133,6 +134,22 @@ TEST(VolumeIo, InvalidContentWithValidChecksum) {
   const std::uint64_t one = 1;
   std::memcpy(small_capacity.data() + 12 + 24, &one, 8);
   expect_parse_error(with_checksum(small_capacity), "at most capacity_blocks = 1");
+}
+
+// Issue 35: a FIFO given as a volume blocked the ifstream's open forever; it is refused before opening.
+TEST(VolumeIo, FifoIsRefusedBeforeOpening) {
+  const std::string fifo = temp_path("fifo");
+  std::filesystem::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::string message;
+  try {
+    load_volume(fifo);
+  } catch (const ParseError& e) {
+    message = e.what();
+  }
+  std::filesystem::remove(fifo);
+  EXPECT_EQ(message, fifo + ": expected a readable hashfusion volume file (cannot read volume file: it is a FIFO, "
+                            "not a regular file)");
 }
 
 TEST(VolumeIo, MissingFileAndAtomicWrite) {

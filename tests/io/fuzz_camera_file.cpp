@@ -1,5 +1,6 @@
 // Fuzzes hf::PinholeCamera::parse (camera.json / camera.txt): a parsed camera is always valid (finite, positive
-// focal lengths, size, focal lengths and principal point within the documented limits); every failure is an hf::ParseError with a short printable
+// focal lengths, size, focal lengths and principal point within the documented limits); every failure is an
+// hf::ParseError with a short printable
 // message.
 #include <cmath>
 #include <cstddef>
