@@ -23,6 +23,7 @@
 #include "fusion/voxel_block_grid.h"
 #include "io/dataset.h"
 #include "io/live_input.h"
+#include "io/replay_source.h"
 #include "slam/pipeline.h"
 #include "slam/sequence_run.h"
 #if HF_HAVE_VIEWER
@@ -47,6 +48,7 @@ struct RunOptions {
   int synthetic_frames = 90;
   std::uint64_t seed = 0;
   bool global = false;  // --global: final pose-graph optimisation over all keyframes and re-fusion
+  bool realtime = false;  // --realtime: a recording replayed at its recorded rate through the live queue
   std::string live_mode = "640x480@30";  // --live-mode for live inputs
   bool view = false;                     // --view: the viewer follows the run
   std::string screenshot;                // --screenshot FILE.png: headless viewer, final view
@@ -102,6 +104,14 @@ std::unique_ptr<FrameSource> open_input(const RunOptions& o) {
   DatasetOptions d;
   d.camera = o.camera;
   return open_dataset(o.input, d);
+}
+
+// --realtime: the recording through a camera's queue at its recorded rate (io/replay_source.h).
+std::unique_ptr<FrameSource> open_run_input(const RunOptions& o) {
+  std::unique_ptr<FrameSource> source = open_input(o);
+  if (!o.realtime) return source;
+  if (source->size() == kUnknownFrameCount) return source;  // live already
+  return open_realtime_replay(std::move(source));
 }
 
 std::string frames_text(const FrameSource& source) {
@@ -166,7 +176,7 @@ void run(const RunOptions& o, const CLI::App& cmd) {
   // replaces --out in one step at the end (core/output_transaction.h).
   OutputTransaction outputs(o.out);
   InterruptGuard guard;  // from here on Ctrl-C / SIGTERM end the loop and the outputs are still written
-  std::unique_ptr<FrameSource> source = open_input(o);
+  std::unique_ptr<FrameSource> source = open_run_input(o);
   if (source->size() == 0) throw Error(o.input + ": the dataset has no frames");
   std::cerr << "input: " << source->name() << ", " << frames_text(*source) << "\n"
             << "camera: " << source->camera().describe() << " (" << source->camera_origin() << ")\n"
@@ -179,6 +189,8 @@ void run(const RunOptions& o, const CLI::App& cmd) {
   control.stop = guard.flag();
   control.progress_label = "run";
   control.global = o.global;
+  // Live input and --realtime: the back-end's results land when they are ready (slam/pipeline.h set_realtime).
+  control.realtime = o.realtime || source->size() == kUnknownFrameCount;
 #if HF_HAVE_VIEWER
   RunOptions staged = o;
   staged.out = outputs.folder();  // the viewer's saved meshes are outputs of this run too
@@ -212,10 +224,14 @@ void run(const RunOptions& o, const CLI::App& cmd) {
               << "\n";
   std::cout << "frames: " << summary.frames << " (" << summary.frames_lost << " lost, " << summary.frames_bad
             << " unreadable), " << summary.fps << " fps\n";
-  if (summary.capture)
+  if (summary.capture) {
     std::cout << "capture: " << summary.capture->captured << " frames at " << summary.capture->input_fps
               << " fps, processed " << summary.capture->delivered << " at " << summary.capture->delivered_fps
               << " fps, dropped " << summary.capture->dropped << "\n";
+    if (summary.latency_p50_ms)
+      std::cout << "latency (arrival to pose): p50 " << *summary.latency_p50_ms << " ms, p95 "
+                << *summary.latency_p95_ms << " ms, max " << *summary.latency_max_ms << " ms\n";
+  }
   if (const auto ate = summary.ate_rmse_m()) {
     std::cout << "ATE RMSE: " << *ate << " m" << (o.global ? " (after --global)" : "");
     if (summary.ate_online_m) std::cout << ", online " << *summary.ate_online_m << " m";
@@ -265,6 +281,10 @@ void add_run_command(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--live-mode", opts->live_mode, "live inputs: WIDTHxHEIGHT@FPS to ask the device for")
       ->capture_default_str();
+  cmd->add_flag("--realtime", opts->realtime,
+                "replay a recording at its recorded rate (7-Scenes: 30 Hz) through a camera's queue of two frames, "
+                "dropping the oldest when processing is slower: fps, dropped frames and latency as a live user "
+                "would get them (the results then depend on timing)");
   cmd->add_flag("--global", opts->global,
                "after the last frame: optimise the keyframe pose graph once more and fuse the map anew from the "
                "corrected poses (report.json holds the online and the final trajectory's ATE)");

@@ -15,9 +15,11 @@
 // construction, so they may be called from any thread, also while next() runs (PrefetchingSource relies on it).
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/camera.h"
 #include "core/image.h"
@@ -33,6 +35,8 @@ struct RgbdFrame {
   ColorImage color;          // RGB
   std::optional<SE3> T_world_camera_gt;  // ground truth where the dataset has one near timestamp_s
   std::string depth_file, color_file;    // full paths, for messages
+  // Live sources: when the frame entered the capture queue (the latency of its pose is measured from here).
+  std::optional<std::chrono::steady_clock::time_point> arrival;
 };
 
 enum class FrameStatus { ok, bad_frame, end };
@@ -51,6 +55,7 @@ inline constexpr size_t kUnknownFrameCount = size_t(-1);
 // frames handed to next(), frames dropped because the consumer was slower, and the two rates over wall time.
 struct CaptureStats {
   size_t captured = 0, delivered = 0, dropped = 0;
+  std::vector<double> dropped_timestamps_s;  // the dropped frames' time stamps, in capture order
   double input_fps = 0.0;      // captured / seconds from the first to the last captured frame
   double delivered_fps = 0.0;  // delivered / seconds from the first captured to the last delivered frame
 };

@@ -9,7 +9,7 @@ if(PkgConfig_FOUND)
 endif()
 
 set(hf_live_sources live_source.cpp live_input.cpp frame_pairing.cpp pixel_formats.cpp v4l2_capture.cpp tum_recorder.cpp
-    libcamera_frames.cpp)
+    libcamera_frames.cpp replay_source.cpp)
 set(hf_have_openni2 0)
 set(hf_have_libcamera 0)
 if(HF_OPENNI2_INCLUDE_DIR AND HF_OPENNI2_LIBRARY)

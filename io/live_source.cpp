@@ -78,9 +78,11 @@ void LiveSource::run() {
     if (!first_capture_) first_capture_ = now;
     last_capture_ = now;
     if (queue_.size() >= options_.queue_frames) {  // only with drop_when_full: the consumer is behind
+      dropped_timestamps_.push_back(queue_.front().timestamp_s);
       queue_.pop_front();
       ++dropped_;
     }
+    r.frame.arrival = now;
     queue_.push_back(std::move(r.frame));
     not_empty_.notify_one();
   }
@@ -111,6 +113,8 @@ FrameRead LiveSource::next() {
   r.frame.timestamp_s = f.timestamp_s;
   r.frame.depth = std::move(f.depth);
   r.frame.color = std::move(f.color);
+  r.frame.T_world_camera_gt = f.T_world_camera_gt;
+  r.frame.arrival = f.arrival;
   r.frame.depth_file = r.frame.color_file = device_->name();
   lock.unlock();
   not_full_.notify_one();
@@ -123,6 +127,7 @@ std::optional<CaptureStats> LiveSource::capture_stats() const {
   s.captured = captured_;
   s.delivered = delivered_;
   s.dropped = dropped_;
+  s.dropped_timestamps_s = dropped_timestamps_;
   if (first_capture_ && last_capture_ && captured_ > 1) {
     const double span = std::chrono::duration<double>(*last_capture_ - *first_capture_).count();
     // n frames span n - 1 intervals.

@@ -25,6 +25,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "io/frame_source.h"
 
@@ -36,6 +37,8 @@ struct CapturedFrame {
   double timestamp_s = 0.0;
   DepthImage depth;
   ColorImage color;
+  std::optional<SE3> T_world_camera_gt;  // a replayed recording's ground truth (io/replay_source.h); else none
+  std::chrono::steady_clock::time_point arrival;  // set by LiveSource when the frame is queued
 };
 
 enum class CaptureStatus { frame, timeout, end, failed };
@@ -120,6 +123,7 @@ class LiveSource : public FrameSource {
   std::string end_message_;      // why, when not a plain end
   bool stop_ = false;            // destructor
   size_t captured_ = 0, delivered_ = 0, dropped_ = 0, next_index_ = 0;
+  std::vector<double> dropped_timestamps_;
   std::optional<Clock::time_point> first_capture_, last_capture_, last_delivery_;
   std::thread thread_;  // last: started after everything it uses exists
 };

@@ -20,16 +20,26 @@ void LoopClosureOptions::validate() const {
     throw Error("loop_closure.time_budget_ms must be positive");
   if (graph.max_iterations < 1 || graph.max_iterations > 10000)
     throw Error("loop_closure.max_iterations must be in [1, 10000]");
+  if (apply_delay_frames < 1 || apply_delay_frames > 10000)
+    throw Error("loop_closure.apply_delay_frames must be in [1, 10000]");
 }
 
 std::vector<size_t> loop_candidates(const KeyframeMap& keyframes, size_t k,
                                     const std::vector<AppearanceMatch>& matches, const LoopClosureOptions& options) {
+  std::vector<bool> has_images(keyframes.size());
+  for (size_t i = 0; i < keyframes.size(); ++i) has_images[i] = keyframes.has_images(i);
+  return loop_candidates(keyframes.all(), has_images, k, matches, options);
+}
+
+std::vector<size_t> loop_candidates(const std::vector<Keyframe>& keyframes, const std::vector<bool>& has_images,
+                                    size_t k, const std::vector<AppearanceMatch>& matches,
+                                    const LoopClosureOptions& options) {
   std::vector<size_t> out;
-  if (k >= keyframes.size()) return out;
+  if (k >= keyframes.size() || has_images.size() < keyframes.size()) return out;
   const SE3& T_world_k = keyframes[k].T_world_camera;
   for (const AppearanceMatch& m : matches) {
     if (m.id >= keyframes.size() || m.id + size_t(options.min_keyframe_gap) > k) continue;
-    if (!keyframes.has_images(m.id)) continue;
+    if (!has_images[m.id]) continue;
     if (keyframes[k].path_m - keyframes[m.id].path_m < options.min_path_m) continue;
     const SE3 T_c_k = keyframes[m.id].T_world_camera.inverse() * T_world_k;
     const double angle_deg = T_c_k.angle_rad() * 180.0 / M_PI;
@@ -51,8 +61,12 @@ Matrix6d odometry_information(const Matrix6d& information, size_t frames) {
 }
 
 PoseGraph keyframe_graph(const KeyframeMap& keyframes, const std::vector<LoopEdge>& loops) {
+  return keyframe_graph(keyframes.all(), loops);
+}
+
+PoseGraph keyframe_graph(const std::vector<Keyframe>& keyframes, const std::vector<LoopEdge>& loops) {
   PoseGraph g;
-  for (const Keyframe& k : keyframes.all()) g.add_node(k.T_world_camera);
+  for (const Keyframe& k : keyframes) g.add_node(k.T_world_camera);
   for (size_t i = 1; i < keyframes.size(); ++i) {
     const Keyframe& a = keyframes[i - 1];
     const Keyframe& b = keyframes[i];

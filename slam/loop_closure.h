@@ -45,7 +45,15 @@ struct LoopClosureOptions {
   double max_angle_deg = 60.0;   // and rotation
   double min_inlier_ratio = 0.3;  // the verifying registration's inlier ratio (status must be good)
   double min_consistent = 0.6;   // share of the overlapping depth that agrees after verification
-  PoseGraphOptions graph;        // Ceres solve (robust loss, consistency test, time budget)
+  PoseGraphOptions graph;        // Ceres solve (robust loss, consistency test, time budget: realtime mode only)
+  // The back-end (slam/backend.h): jobs run on their own thread beside tracking (true) or inline on the tracking
+  // thread at their snapshot (false: the same results, the cost on the frame). A job snapshotted at frame s is
+  // applied before frame s + apply_delay_frames is tracked. A correction that lands late is tracked against for
+  // longer at the old map: on the synthetic lap (250 frames, 640x480) ATE 1.39 mm at 1, 1.40 at 3, 2.60 at 10 (loop
+  // closure off: 3.81; bench/results/backend.md). 3 frames (~100 ms at 30 Hz) fit a job's verification and solve
+  // (tens of ms on an unloaded core) beside tracking, so the tracker rarely waits.
+  bool background = true;
+  int apply_delay_frames = 3;
 
   void validate() const;  // hf::Error naming the bad field
 };
@@ -60,11 +68,17 @@ struct LoopEdge {
 // The keyframes worth verifying against keyframe k, best appearance first (see the header comment).
 std::vector<size_t> loop_candidates(const KeyframeMap& keyframes, size_t k,
                                     const std::vector<AppearanceMatch>& matches, const LoopClosureOptions& options);
+// The same over keyframes held as values (the back-end's snapshot, slam/backend.h): has_images[i] says whether
+// keyframe i can still be registered against.
+std::vector<size_t> loop_candidates(const std::vector<Keyframe>& keyframes, const std::vector<bool>& has_images,
+                                    size_t k, const std::vector<AppearanceMatch>& matches,
+                                    const LoopClosureOptions& options);
 
 // The pose graph over every keyframe (current poses as the initial values) with the odometry chain and `loops`.
 // An odometry edge is the keyframe-to-keyframe registration where one was measured (Keyframe::
 // odometry_information non-zero), else the tracked relative pose.
 PoseGraph keyframe_graph(const KeyframeMap& keyframes, const std::vector<LoopEdge>& loops);
+PoseGraph keyframe_graph(const std::vector<Keyframe>& keyframes, const std::vector<LoopEdge>& loops);
 
 // Information of an odometry edge spanning `frames` frames whose later end was placed with `information`: the
 // information divided by the frames (at least 1), floored at a small multiple of the identity so a keyframe placed

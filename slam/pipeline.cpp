@@ -12,6 +12,7 @@
 #include "fusion/mesh.h"
 #include "fusion/raycast_sampled.h"
 #include "registration/pixel_selection.h"
+#include "slam/consistency.h"
 #ifdef HF_HAVE_FUSION_OPENCL
 #include "fusion/opencl/device_voxel_grid.h"
 #include "registration/opencl/device_pyramid.h"
@@ -21,60 +22,6 @@
 
 namespace hf::slam {
 namespace {
-
-// Share of the frame's depth that agrees with a reference depth image where it lands (see
-// PipelineConfig::min_consistent): (pixels sampled, pixels landing on the reference, pixels agreeing).
-struct Consistency {
-  long sampled = 0, overlap = 0, consistent = 0;
-};
-
-// Every 4th pixel of `current` in x and y, moved by T (float): agree(p, z_cur) returns -1 (no overlap), 0 or 1.
-template <class Agree>
-Consistency sample_consistency(const VertexMap& current, const SE3& T, Agree agree) {
-  const Eigen::Matrix3f R = T.rotation().cast<float>();
-  const Eigen::Vector3f t = T.translation().cast<float>();
-  Consistency c;
-  constexpr int kStride = 4;
-  for (int y = kStride / 2; y < current.height(); y += kStride) {
-    for (int x = kStride / 2; x < current.width(); x += kStride) {
-      const hf_float4& v = current(x, y);
-      if (v.w == 0.0f) continue;
-      ++c.sampled;
-      const int a = agree(Eigen::Vector3f(R * Eigen::Vector3f(v.x, v.y, v.z) + t), v.z);
-      if (a < 0) continue;
-      ++c.overlap;
-      c.consistent += a;
-    }
-  }
-  return c;
-}
-
-Consistency depth_consistency(const VertexMap& current, const DepthImage& reference_depth, const PinholeCamera& cam,
-                              const SE3& T_ref_cur, double voxel_m) {
-  return sample_consistency(current, T_ref_cur, [&](const Eigen::Vector3f& p, float) {
-    if (!(p.z() > 0.0f)) return -1;
-    const Eigen::Vector2d px = cam.project(p.cast<double>());
-    const int u = int(std::lround(px.x())), w = int(std::lround(px.y()));
-    if (u < 0 || w < 0 || u >= cam.width || w >= cam.height) return -1;
-    const float d_ref = reference_depth(u, w);
-    if (!(d_ref > 0.0f)) return -1;
-    return int(std::abs(d_ref - p.z()) <= 3.0f * hf_kinect_axial_sigma_m(p.z()) + float(voxel_m));
-  });
-}
-
-// depth_consistency's question asked of the map itself, for a primary method that aligns to the volume (no
-// tracking raycast to compare with): a sample overlaps where the TSDF around its world point is observed, and
-// agrees where its distance to the surface there is within the same noise bound.
-Consistency volume_consistency(const VertexMap& current, const fusion::VoxelBlockGrid& grid,
-                               const SE3& T_world_cur) {
-  const float inv_voxel = float(1.0 / grid.params().voxel_m), mu = float(grid.params().truncation_m());
-  fusion::VolumeSampler sampler(grid, 0.0f, false);
-  return sample_consistency(current, T_world_cur, [&](const Eigen::Vector3f& p, float z_cur) {
-    float s = 0.0f;
-    if (!sampler.sdf(p * inv_voxel - Eigen::Vector3f::Constant(0.5f), &s)) return -1;
-    return int(std::abs(s * mu) <= 3.0f * hf_kinect_axial_sigma_m(z_cur) + 1.0f / inv_voxel);
-  });
-}
 
 // The intensity levels of `from` move onto the levels `to` has (the photometric reference); nothing else of
 // `from` is needed again. The images keep their pixels' addresses, so their device copies (core/device_copy.h)
@@ -185,6 +132,11 @@ Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
     appearance_ = make_appearance_index(config_.relocalisation.appearance.empty()
                                             ? default_appearance_index_name()
                                             : config_.relocalisation.appearance);
+  if (config_.loop_closure.enabled && appearance_) {
+    loop_closer_ = std::make_unique<LoopCloser>(config_.loop_closure, config_.pyramid, config_.tracking_level, camera_,
+                                                config_.volume.voxel_m);
+    if (config_.loop_closure.background) backend_thread_ = std::make_unique<BackendThread>("hf-backend");
+  }
 }
 
 Pipeline::~Pipeline() = default;
@@ -217,10 +169,11 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
     return r;
   }
 
+  finish_loop_job(false, &r);  // a back-end result due now moves the poses before this frame is tracked
   FramePyramid current = preprocess(frame, &r);
   if (!T_world_cur_ || !reference_->valid) {
     initialise(frame, current, &r);
-    record_anchor(r);
+    end_frame(&r);
     return r;
   }
   Verdict v = track(current, frame.timestamp_s, &r);
@@ -230,8 +183,7 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
   if (v.action == Verdict::lose) {
     r.registration = std::move(v.registration);
     lose(&r, v.why);
-    reintegrate(&r);
-    record_anchor(r);
+    end_frame(&r);
     return r;
   }
   // The verdict is final: apply it.
@@ -253,10 +205,17 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
   last_time_s_ = frame.timestamp_s;
   lost_spell_ = 0;
   if (r.integrated) keep_frame(frame, &r);
-  if (r.keyframe) close_loops(frame, &r);
-  reintegrate(&r);
-  record_anchor(r);
+  if (r.keyframe) query_loop_candidates(frame, &r);
+  end_frame(&r);
   return r;
+}
+
+// Between this frame and the next: the re-fusion budget, a back-end job when one can start, the backlog.
+void Pipeline::end_frame(FrameResult* r) {
+  reintegrate(r);
+  start_loop_job(r);
+  r->refusion_backlog = fused_.pending();
+  record_anchor(*r);
 }
 
 // Every frame_step-th integrated frame while undecided, as long as the primary reads colour. Once the colour is
@@ -313,7 +272,7 @@ void Pipeline::initialise(const RgbdFrame& frame, FramePyramid& current, FrameRe
   velocity_ = SE3();
   lost_spell_ = 0;
   keep_frame(frame, r);
-  if (r->keyframe) close_loops(frame, r);
+  if (r->keyframe) query_loop_candidates(frame, r);
 }
 
 Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_s, FrameResult* r) {
@@ -486,117 +445,145 @@ std::vector<SE3> Pipeline::corrected_trajectory() const {
   return out;
 }
 
-// Registers the new keyframe against its loop candidates from the relative pose their current poses imply; the
-// first verified one becomes a loop edge and the graph is solved.
-void Pipeline::close_loops(const RgbdFrame& frame, FrameResult* r) {
-  if (!config_.loop_closure.enabled || !appearance_ || keyframes_.empty()) return;
+// The new keyframe's appearance matches, retrieved now: the index is this thread's (the back-end gets copies).
+void Pipeline::query_loop_candidates(const RgbdFrame& frame, FrameResult* r) {
+  if (!loop_closer_ || keyframes_.empty()) return;
   const auto t0 = std::chrono::steady_clock::now();
   const LoopClosureOptions& lo = config_.loop_closure;
   const size_t k = keyframes_.size() - 1;
-  FramePyramidOptions po = config_.pyramid;
-  po.first_level = config_.tracking_level;
-  FramePyramid kp = frame_pyramid(device_pyramid_.get(), frame.depth, frame.color, camera_, po);
-  measure_odometry_edge(kp);
-  std::vector<size_t> candidates;
-  if (k > 0) {
-    const std::vector<AppearanceMatch> matches =
-        appearance_->query(frame.color, frame.depth, size_t(lo.candidates + lo.min_keyframe_gap) * 2);
-    candidates = loop_candidates(keyframes_, k, matches, lo);
+  const size_t wanted = size_t(lo.candidates + lo.min_keyframe_gap) * 2;
+  loop_matches_[k] = k == 0 ? std::vector<AppearanceMatch>{} : appearance_->query(frame.color, frame.depth, wanted);
+  r->ms.loop += ms_since(t0);
+}
+
+// A job for the keyframes new since the last one, when none is in flight. Only keyframes whose images are
+// committed go (the newest may still be compressing: it goes with the next job), so what a job holds depends on
+// the frames processed, never on how fast the compression ran.
+void Pipeline::start_loop_job(FrameResult* r) {
+  if (!loop_closer_ || loop_job_) return;
+  size_t limit = keyframes_.size();
+  if (pending_images_ && pending_images_->keyframe) limit = std::min(limit, *pending_images_->keyframe);
+  if (keyframes_handed_ >= limit) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  LoopJob job;
+  job.snapshot_frame = frames_;
+  job.keyframes.reserve(limit);
+  job.has_images.reserve(limit);
+  for (size_t i = 0; i < limit; ++i) {
+    job.keyframes.push_back(keyframe_metadata(keyframes_[i]));
+    job.has_images.push_back(keyframes_.has_images(i));
   }
-  if (candidates.empty()) {
-    keyframe_pyramid_ = std::move(kp);
-    r->ms.loop = ms_since(t0);
-    return;
-  }
-  // The primary method: keyframe pairs often see one wall and a floor, which leaves ICP alone degenerate.
-  Registration& verifier = *registration_;
-  size_t added = 0;
-  for (size_t c : candidates) {
-    const DepthImage cd = keyframes_.depth(c);
-    const ColorImage cc = keyframes_.colour(c);
-    const FramePyramid cp = frame_pyramid(device_pyramid_.get(), cd, cc, camera_, po);
-    const SE3 guess = keyframes_[c].T_world_camera.inverse() * keyframes_[k].T_world_camera;
-    const std::optional<RegistrationResult> reg = register_keyframes(verifier, kp, cp, guess);
-    if (!reg) continue;
-    loops_.push_back({c, k, reg->T_ref_cur, reg->information});
-    ++added;
-  }
-  keyframe_pyramid_ = std::move(kp);
-  double refuse_ms = 0.0;
-  if (added > 0 && apply_graph(lo.graph, added)) {
-    r->loop_closed = true;
-    ++loops_closed_;
-    // The tracking reference keeps its maps (camera frame) and moves with the current keyframe.
-    const SE3 T_new = keyframes_[k].T_world_camera;
-    T_world_cur_ = T_new;
-    reference_->T_world_model = T_new;
-    commit_pending_images();  // the frame still being compressed is re-fused with the others
-    if (config_.reintegration.enabled) {
-      fused_.schedule(keyframes_);
-      const auto t1 = std::chrono::steady_clock::now();
-      r->reintegrated += fused_.step(size_t(config_.reintegration.frames_after_loop), keyframes_, grid_, camera_,
-                                     config_.integrate, &store_);
-      refuse_ms = ms_since(t1);
-      r->ms.reintegrate += refuse_ms;  // its own stage, not the loop's
+  job.loops = loops_;
+  for (size_t id = keyframes_handed_; id < limit; ++id) {
+    LoopJobKeyframe added;
+    added.id = id;
+    added.images = keyframes_[id].images;
+    const auto m = loop_matches_.find(id);
+    if (m != loop_matches_.end()) {
+      added.matches = std::move(m->second);
+      loop_matches_.erase(m);
     }
+    job.added.push_back(std::move(added));
   }
-  r->ms.loop = ms_since(t0) - refuse_ms;
+  keyframes_handed_ = limit;
+  job.method = registration_->name();
+  job.method_options = registration_->options();
+  job.time_budget = realtime_;
+
+  LoopJobInFlight in_flight;
+  in_flight.result = std::make_shared<LoopJobResult>();
+  in_flight.apply_at_frame = frames_ + size_t(config_.loop_closure.apply_delay_frames);
+  // The task owns the job and writes only the result slot; `done` orders that write before the tracker's read.
+  auto task = [closer = loop_closer_.get(), result = in_flight.result, job = std::move(job)]() mutable {
+    *result = closer->run(std::move(job));
+  };
+  if (backend_thread_) {
+    in_flight.done = backend_thread_->submit(std::move(task));
+  } else {
+    std::packaged_task<void()> now(std::move(task));
+    in_flight.done = now.get_future();
+    now();
+  }
+  loop_job_ = std::move(in_flight);
+  r->ms.loop += ms_since(t0);
 }
 
-// The newest keyframe registered against the previous one (their own images, the tracked relative pose as the
-// guess). Kept as the odometry edge only when the registration is good and the two depths agree; otherwise the
-// graph keeps the tracked relative pose (after a relocalisation the previous keyframe may be out of sight).
-void Pipeline::measure_odometry_edge(const FramePyramid& keyframe) {
-  const size_t k = keyframes_.size() - 1;
-  if (k == 0 || !keyframe_pyramid_ || keyframe_pyramid_->num_levels() == 0) return;
-  const std::optional<RegistrationResult> reg =
-      register_keyframes(*registration_, keyframe, *keyframe_pyramid_, keyframes_[k].T_previous_this);
-  if (!reg || reg->degenerate_dims > 0) return;
-  keyframes_.set_odometry(k, reg->T_ref_cur, reg->information);
+// Applies the job in flight when it is due (offline: at its frame, waiting for it if it is late; realtime: as
+// soon as it is done), or, with `wait`, now.
+void Pipeline::finish_loop_job(bool wait, FrameResult* r) {
+  if (!loop_job_) return;
+  if (!wait) {
+    const bool due = realtime_ ? loop_job_->done.wait_for(std::chrono::seconds(0)) == std::future_status::ready
+                               : frames_ >= loop_job_->apply_at_frame;
+    if (!due) return;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  LoopJobInFlight job = std::move(*loop_job_);
+  loop_job_.reset();
+  job.done.get();  // waits when the back-end is late; rethrows its error
+  const double refuse_before = r->ms.reintegrate;
+  apply_loop_result(*job.result, r);
+  r->ms.loop += ms_since(t0) - (r->ms.reintegrate - refuse_before);  // the re-fusion burst is its own stage
 }
 
-// One keyframe pair registered and verified as loop closure verifies (loop_closure.min_inlier_ratio and
-// min_consistent): the result when the registration is good and the depths agree where they overlap.
-std::optional<RegistrationResult> Pipeline::register_keyframes(Registration& method, const FramePyramid& current,
-                                                               const FramePyramid& reference, const SE3& guess) const {
-  const LoopClosureOptions& lo = config_.loop_closure;
-  RegistrationResult reg = method.align(current, reference, guess);
-  if (reg.status != RegistrationStatus::good || reg.inlier_ratio < lo.min_inlier_ratio) return std::nullopt;
-  const Consistency cons = depth_consistency(current.levels[0].vertices, depth_of(reference.levels[0].vertices),
-                                             tracking_camera_, reg.T_ref_cur, config_.volume.voxel_m);
-  if (cons.overlap == 0 || double(cons.consistent) < lo.min_consistent * double(cons.overlap)) return std::nullopt;
-  return reg;
+void Pipeline::apply_loop_result(const LoopJobResult& res, FrameResult* r) {
+  r->loop_applied = true;
+  r->backend_job_ms = res.ms;
+  for (const LoopJobResult::Odometry& o : res.odometry)
+    if (o.id < keyframes_.size()) keyframes_.set_odometry(o.id, o.T_previous_this, o.information);
+  loops_ = res.loops;  // only jobs change the loops, and one runs at a time: the list it started from is ours
+  if (res.T_world_keyframe.empty() || res.keyframes == 0 || res.keyframes > keyframes_.size()) return;
+  // The keyframes made after the snapshot, the current pose and the tracking reference (its maps are in the
+  // camera frame) move rigidly with the snapshot's newest keyframe.
+  const size_t n = res.keyframes;
+  const SE3 correction = res.T_world_keyframe[n - 1] * keyframes_[n - 1].T_world_camera.inverse();
+  for (size_t i = 0; i < n; ++i) keyframes_.set_pose(i, res.T_world_keyframe[i]);
+  for (size_t i = n; i < keyframes_.size(); ++i) keyframes_.set_pose(i, correction * keyframes_[i].T_world_camera);
+  if (T_world_cur_) T_world_cur_ = correction * *T_world_cur_;
+  reference_->T_world_model = correction * reference_->T_world_model;
+  loops_closed_ += res.loops_closed;
+  r->loop_closed = true;
+  ++corrections_;
+  if (!config_.reintegration.enabled) return;
+  fused_.schedule(keyframes_, camera_, config_.volume.voxel_m);
+  // The most-displaced frames are the ones just before the loop, whose surfaces the camera sees now: until they
+  // are re-fused, the next frames track against them at their old poses and snap back by the correction.
+  // Realtime mode has only its per-frame budget.
+  if (realtime_) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  const size_t done = fused_.step(size_t(config_.reintegration.frames_after_loop), keyframes_, grid_, camera_,
+                                  config_.integrate, &store_);
+  r->reintegrated += done;
+  r->ms.reintegrate += ms_since(t0);
+  if (done > 0) device_map_stale_ = true;
 }
 
-// Solves the keyframe graph; on success every keyframe takes its solution. The newest `new_loops` loops are
-// checked by the graph's consistency test: those it rejects are dropped, and when it rejects all of them nothing
-// moves (false). False too when the solve failed.
-bool Pipeline::apply_graph(const PoseGraphOptions& options, size_t new_loops) {
+// Solves the keyframe graph (finish(true)); on success every keyframe takes its solution. False when the solve
+// failed.
+bool Pipeline::apply_graph(const PoseGraphOptions& options) {
   const PoseGraph g = keyframe_graph(keyframes_, loops_);
   const PoseGraphResult res = g.optimize(options);
   if (!res.ok()) return false;
-  new_loops = std::min(new_loops, loops_.size());
-  if (new_loops > 0 && res.loop_accepted.size() == loops_.size()) {
-    const size_t first = loops_.size() - new_loops;
-    std::vector<LoopEdge> kept(loops_.begin(), loops_.begin() + std::ptrdiff_t(first));
-    for (size_t i = first; i < loops_.size(); ++i)
-      if (res.loop_accepted[i]) kept.push_back(loops_[i]);
-    const bool any = kept.size() > first;
-    loops_ = std::move(kept);
-    if (!any) return false;
-  }
   for (size_t i = 0; i < keyframes_.size() && i < res.T_world_node.size(); ++i)
     keyframes_.set_pose(i, res.T_world_node[i]);
   return true;
 }
 
+// The re-fusion budget between two frames: frames_per_step re-fusions offline, budget_ms_per_frame realtime.
 void Pipeline::reintegrate(FrameResult* r) {
   if (!config_.reintegration.enabled || fused_.pending() == 0) return;
   const auto t0 = std::chrono::steady_clock::now();
-  r->reintegrated += fused_.step(size_t(config_.reintegration.frames_per_step), keyframes_, grid_, camera_,
-                                config_.integrate, &store_);
+  size_t done = 0;
+  if (realtime_) {
+    while (fused_.pending() > 0 && ms_since(t0) < config_.reintegration.budget_ms_per_frame)
+      done += fused_.step(1, keyframes_, grid_, camera_, config_.integrate, &store_);
+  } else {
+    done = fused_.step(size_t(config_.reintegration.frames_per_step), keyframes_, grid_, camera_, config_.integrate,
+                       &store_);
+  }
+  r->reintegrated += done;
   r->ms.reintegrate += ms_since(t0);
-  if (r->reintegrated > 0) device_map_stale_ = true;  // also the loop's burst (close_loops runs just before)
+  if (done > 0) device_map_stale_ = true;
 }
 
 double Pipeline::finish(bool global) {
@@ -604,6 +591,11 @@ double Pipeline::finish(bool global) {
   if (!registration_) return 0.0;
   device_map_stale_ = true;
   commit_pending_images();
+  // The job in flight, then one for the keyframes it did not see (every image is committed now).
+  FrameResult scratch;
+  finish_loop_job(true, &scratch);
+  start_loop_job(&scratch);
+  finish_loop_job(true, &scratch);
   if (global && keyframes_.size() > 1) {
     PoseGraphOptions o = config_.loop_closure.graph;
     o.time_budget_ms = std::max(o.time_budget_ms, 10000.0);
@@ -613,7 +605,7 @@ double Pipeline::finish(bool global) {
     if (!loops_.empty()) apply_graph(o);
     if (config_.reintegration.enabled) fused_.refuse_all(keyframes_, grid_, camera_, config_.integrate, &store_);
   } else if (config_.reintegration.enabled) {
-    fused_.schedule(keyframes_);
+    fused_.schedule(keyframes_, camera_, config_.volume.voxel_m);
     fused_.step(fused_.pending(), keyframes_, grid_, camera_, config_.integrate, &store_);
   }
   return ms_since(t0);
@@ -726,9 +718,14 @@ void Pipeline::keep_frame(const RgbdFrame& frame, FrameResult* r) {
     return;
   }
   PendingImages p;
+  p.correction = corrections_;
   p.images = std::async(std::launch::async, [depth = frame.depth, colour = frame.color,
-                                             quality = config_.keyframes.jpeg_quality] {
-    return CompressedRgbd::encode(depth, colour, quality);
+                                             quality = config_.keyframes.jpeg_quality, params = config_.integrate] {
+    KeptImages kept;
+    kept.images = CompressedRgbd::encode(depth, colour, quality);
+    for (const float d : depth.pixels())  // what integrate() took: finite, within [min_depth_m, max_depth_m]
+      if (d >= params.min_depth_m && d <= params.max_depth_m && d > kept.max_depth_m) kept.max_depth_m = d;
+    return kept;
   });
   if (keyframe) {
     const Matrix6d info = r->registration ? r->registration->information : Matrix6d::Zero();
@@ -751,10 +748,15 @@ void Pipeline::commit_pending_images() {
   if (!pending_images_) return;
   PendingImages p = std::move(*pending_images_);
   pending_images_.reset();
-  CompressedRgbd images = p.images.get();
+  KeptImages kept = p.images.get();
   const bool refuse = config_.reintegration.enabled && !keyframes_.empty();
-  if (p.keyframe) keyframes_.set_images(*p.keyframe, refuse ? images : std::move(images));
-  if (refuse) fused_.add(p.frame_index, p.anchor, p.T_world_anchor, p.T_world_frame, std::move(images));
+  if (p.keyframe) keyframes_.set_images(*p.keyframe, refuse ? kept.images : std::move(kept.images));
+  if (!refuse) return;
+  // Voxels up to a truncation band beyond the farthest depth were updated.
+  fused_.add(p.frame_index, p.anchor, p.T_world_anchor, p.T_world_frame, std::move(kept.images),
+             double(kept.max_depth_m) + grid_.params().truncation_m());
+  // A loop result applied since the frame was kept moved its anchor: it joins the re-fusion queue.
+  if (p.correction != corrections_) fused_.schedule(keyframes_, camera_, config_.volume.voxel_m);
 }
 
 void Pipeline::lose(FrameResult* r, std::string why) {

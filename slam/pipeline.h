@@ -25,17 +25,31 @@
 //   raycast      the model maps at the new pose: the next frame's reference.
 //   keyframe     an integrated frame is compressed once (slam/keyframes.h CompressedRgbd) and kept for re-fusion
 //                (slam/reintegration.h); one that moved far enough from the last keyframe becomes a keyframe and
-//                is added to the appearance index. The compression runs on a worker thread while the next frame
+//                is added to the appearance index, which retrieves its loop candidates' appearance matches now
+//                (the index belongs to this thread). The compression runs on a worker thread while the next frame
 //                is processed (it is single-threaded PNG + JPEG work, ~11-14 ms at 640x480, beside stages that
 //                are not); the images join the keyframe and the re-fusion store before anything reads them.
-//   close_loops  for a new keyframe: first its odometry edge, registered against the previous keyframe's own
-//                images (independent of the map, so the chain keeps the drift a loop must remove); then loop candidates by appearance and pose proximity, verified by registration
-//                (icp from the poses' relative guess, then inlier ratio and depth agreement); a verified loop
-//                joins the keyframe pose graph, which Ceres solves within loop_closure.time_budget_ms
-//                (slam/loop_closure.h, slam/pose_graph.h); the keyframes take the solution, the current pose with
-//                them, and every fused frame whose anchored pose moved is queued for re-fusion.
-//   reintegrate  up to reintegration.frames_per_step queued frames, most-changed first, are taken out of the
-//                map at the pose they were fused at and fused again at their corrected one (slam/reintegration.h).
+//   close_loops  the back-end (slam/backend.h), beside tracking on the thread "hf-backend": once no job is in
+//                flight and new keyframes have their images, a job takes a snapshot of the keyframe poses, the
+//                loops and the new keyframes (their images and appearance matches) after frame s, and is applied
+//                before frame s + loop_closure.apply_delay_frames is tracked, the tracker waiting there only if it
+//                is late (realtime mode: applied at the first frame boundary after it is done, never waited for). Per new keyframe the job registers its odometry edge against the
+//                previous keyframe's own images (independent of the map, so the chain keeps the drift a loop must
+//                remove), verifies loop candidates by appearance and pose proximity by registration (from the
+//                poses' relative guess, then inlier ratio and depth agreement), and solves the keyframe pose graph
+//                when a loop was verified (slam/loop_closure.h, slam/pose_graph.h). Applying it: the keyframes take
+//                the solution (those made after the snapshot, the current pose and the tracking reference move
+//                rigidly with the snapshot's newest keyframe), and the fused frames whose anchored pose moved are
+//                queued for re-fusion, the most-changed reintegration.frames_after_loop of them at once.
+//   reintegrate  between frames, queued frames (most-changed first) are taken out of the map at the pose they were
+//                fused at and fused again at their corrected one (slam/reintegration.h): frames_per_step per frame
+//                (offline, so results stay exact), or as many as fit budget_ms_per_frame (realtime mode).
+//
+// The tracking thread's back-end work per frame is thus bounded by the view, not by the session: an appearance
+// query on keyframes, the job's snapshot (copies of keyframe poses: O(keyframes), microseconds), applying a result
+// (O(keyframes + fused frames) pose products), and the re-fusion budget. The cost that grows with the session
+// (verification, graph solves) runs on the back-end; it holds a frame only when it is later than
+// apply_delay_frames (FrameResult::ms.loop says how long).
 //
 // Poses: FrameResult::T_world_camera is the ONLINE estimate, the pose known when the frame was processed.
 // corrected_trajectory() gives every processed frame's pose after the loop closures so far (each frame moves with
@@ -63,7 +77,9 @@
 // `registration = "groundtruth"` skips tracking and uses each frame's ground-truth pose (fusion-only runs);
 // frames without ground truth are then lost.
 //
-// Thread-safety: one process() at a time; it uses all cores itself.
+// Thread-safety: one process() at a time; it uses all cores itself. The back-end thread touches no state of the
+// pipeline (it works on copies and its own LoopCloser); the map and keyframes change only inside process() and
+// finish(), on the caller's thread.
 #pragma once
 
 #include <nlohmann/json_fwd.hpp>
@@ -84,6 +100,7 @@
 #include "registration/frame_pyramid.h"
 #include "registration/registration.h"
 #include "slam/appearance.h"
+#include "slam/backend.h"
 #include "slam/keyframes.h"
 #include "slam/loop_closure.h"
 #include "slam/pipeline_config.h"
@@ -128,6 +145,9 @@ struct FrameResult {
   bool keyframe = false;     // the frame became a keyframe
   bool loop_closed = false;  // a verified loop at this keyframe moved the keyframes
   size_t reintegrated = 0;   // earlier frames re-fused at their corrected poses during this frame
+  size_t refusion_backlog = 0;  // frames still queued for re-fusion after this frame (FusedFrames::pending)
+  bool loop_applied = false;    // a back-end job's result was applied before this frame was tracked
+  double backend_job_ms = 0.0;  // that job's own time on the back-end thread (not on this frame's)
   std::string method;        // the registration that placed the frame (primary, fallback, or "relocalisation")
   std::optional<RegistrationResult> registration;  // the one that placed (or failed to place) the frame
   std::string message;       // why the frame was lost (one line), empty otherwise
@@ -151,6 +171,13 @@ class Pipeline {
   // throws hf::Error for a frame of the wrong size and fusion::CapacityError when the block pool is exhausted.
   FrameResult process(const RgbdFrame& frame);
 
+  // Realtime mode (live input, replay at the recorded rate): back-end results are applied as soon as they are
+  // done, never waited for, the pose graph keeps its time budget, and re-fusion takes
+  // reintegration.budget_ms_per_frame of each frame instead of frames_per_step frames. Results then depend on
+  // timing. Off (the default): every result is a function of the input and the config alone.
+  void set_realtime(bool realtime) { realtime_ = realtime; }
+  bool realtime() const { return realtime_; }
+
   const PipelineConfig& config() const { return config_; }
   const PinholeCamera& camera() const { return camera_; }
   const fusion::VoxelBlockGrid& map() const { return grid_; }
@@ -169,8 +196,10 @@ class Pipeline {
 
   // Every processed frame's pose after the loop closures so far, in processing order.
   std::vector<SE3> corrected_trajectory() const;
-  // After the last frame: re-fuses every queued frame; with `global`, first solves the keyframe graph once more
-  // (a longer budget) and then fuses the map anew from every stored frame at its final pose. Returns the ms taken.
+  // After the last frame: applies the back-end's job in flight and runs one more for the keyframes it has not
+  // seen, then re-fuses every queued frame (the backlog ends at 0); with `global`, first solves the keyframe graph
+  // once more (a longer budget) and then fuses the map anew from every stored frame at its final pose. Returns
+  // the ms taken.
   double finish(bool global = false);
 
   // The whole map (resident and streamed-out blocks) as a welded, coloured mesh.
@@ -200,11 +229,12 @@ class Pipeline {
   RegistrationResult align_to_model(Registration& method, const FramePyramid& current, const SE3& guess);
   void keep_frame(const RgbdFrame& frame, FrameResult* r);
   void commit_pending_images();
-  void close_loops(const RgbdFrame& frame, FrameResult* r);
-  void measure_odometry_edge(const FramePyramid& keyframe);
-  std::optional<RegistrationResult> register_keyframes(Registration& method, const FramePyramid& current,
-                                                       const FramePyramid& reference, const SE3& guess) const;
-  bool apply_graph(const PoseGraphOptions& options, size_t new_loops = 0);
+  void end_frame(FrameResult* r);
+  void query_loop_candidates(const RgbdFrame& frame, FrameResult* r);
+  void start_loop_job(FrameResult* r);
+  void finish_loop_job(bool wait, FrameResult* r);
+  void apply_loop_result(const LoopJobResult& result, FrameResult* r);
+  bool apply_graph(const PoseGraphOptions& options);
   void reintegrate(FrameResult* r);
   void record_anchor(const FrameResult& r);
   void check_colour(const FramePyramid& current, FrameResult* r);
@@ -231,14 +261,32 @@ class Pipeline {
   std::vector<LoopEdge> loops_;
   size_t loops_closed_ = 0;
   // The last kept frame while its images are compressed on a worker thread (keep_frame).
+  struct KeptImages {
+    CompressedRgbd images;
+    float max_depth_m = 0.0f;  // the farthest depth integrated (slam/reintegration.h FusedFrames::add)
+  };
   struct PendingImages {
-    std::future<CompressedRgbd> images;
+    std::future<KeptImages> images;
+    size_t correction = 0;  // corrections_ when it was kept: a correction since then re-schedules re-fusion
     std::optional<size_t> keyframe;  // the keyframe it made, if any
     size_t frame_index = 0, anchor = 0;
     SE3 T_world_anchor, T_world_frame;  // as fused (a loop closure may move the anchor before the commit)
   };
   std::optional<PendingImages> pending_images_;
-  std::optional<FramePyramid> keyframe_pyramid_;  // the newest keyframe's, for the next odometry edge
+  // The back-end (slam/backend.h). loop_closer_ exists when loop closure runs; backend_thread_ when it runs
+  // beside tracking (loop_closure.background), else jobs run inline at their snapshot with the same results.
+  std::unique_ptr<LoopCloser> loop_closer_;
+  std::unique_ptr<BackendThread> backend_thread_;
+  struct LoopJobInFlight {
+    std::future<void> done;                 // the back-end's task (its exception comes out of get())
+    std::shared_ptr<LoopJobResult> result;  // written by the task before `done` is ready, read after
+    size_t apply_at_frame = 0;              // frames_ at which it is applied (offline)
+  };
+  std::optional<LoopJobInFlight> loop_job_;
+  std::map<size_t, std::vector<AppearanceMatch>> loop_matches_;  // per keyframe not yet handed to a job
+  size_t keyframes_handed_ = 0;  // keyframes [0, this) were given to a job
+  size_t corrections_ = 0;       // loop results applied that moved keyframes
+  bool realtime_ = false;
   // Per processed frame: the keyframe it moves with (npos before the first) and its pose relative to it.
   struct Anchor {
     size_t keyframe;

@@ -163,6 +163,8 @@ void visit(V&& v, LoopClosureOptions& o) {
   v("loop_reject_chi2", o.graph.loop_reject_chi2);
   v("max_iterations", o.graph.max_iterations);
   v("time_budget_ms", o.graph.time_budget_ms);
+  v("background", o.background);
+  v("apply_delay_frames", o.apply_delay_frames);
 }
 template <class V>
 void visit(V&& v, ReintegrationOptions& o) {
@@ -171,6 +173,8 @@ void visit(V&& v, ReintegrationOptions& o) {
   v("min_rotation_deg", o.min_rotation_deg);
   v("frames_per_step", o.frames_per_step);
   v("frames_after_loop", o.frames_after_loop);
+  v("budget_ms_per_frame", o.budget_ms_per_frame);
+  v("min_displacement_vox", o.min_displacement_vox);
   v("memory_budget_mb", o.memory_budget_mb);
 }
 template <class V>

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <utility>
 
+#include <Eigen/Core>
+
 #include "core/error.h"
 #include "fusion/deintegrate.h"
 
@@ -14,6 +16,10 @@ void ReintegrationOptions::validate() const {
     throw Error("reintegration.min_translation_m must be >= 0");
   if (!(min_rotation_deg >= 0) || !std::isfinite(min_rotation_deg))
     throw Error("reintegration.min_rotation_deg must be >= 0");
+  if (!(min_displacement_vox >= 0) || !std::isfinite(min_displacement_vox))
+    throw Error("reintegration.min_displacement_vox must be >= 0");
+  if (!(budget_ms_per_frame >= 0) || !std::isfinite(budget_ms_per_frame))
+    throw Error("reintegration.budget_ms_per_frame must be >= 0");
   if (frames_per_step < 0 || frames_per_step > 1000) throw Error("reintegration.frames_per_step must be in [0, 1000]");
   if (frames_after_loop < 0 || frames_after_loop > 100000)
     throw Error("reintegration.frames_after_loop must be in [0, 100000]");
@@ -23,11 +29,25 @@ void ReintegrationOptions::validate() const {
 
 FusedFrames::FusedFrames(const ReintegrationOptions& options) : options_(options) { options_.validate(); }
 
+double correction_displacement_m(const SE3& T_old_new, const PinholeCamera& camera, double range_m) {
+  const Eigen::Matrix3d R = T_old_new.rotation();
+  const Eigen::Vector3d t = T_old_new.translation();
+  double worst = t.norm();  // the camera centre
+  const double z = std::max(range_m, 0.0);
+  for (const double u : {-0.5, double(camera.width) - 0.5})
+    for (const double v : {-0.5, double(camera.height) - 0.5}) {
+      const Eigen::Vector3d p(z * (u - camera.cx) / camera.fx, z * (v - camera.cy) / camera.fy, z);
+      worst = std::max(worst, (R * p + t - p).norm());
+    }
+  return worst;
+}
+
 void FusedFrames::add(size_t frame_index, size_t keyframe, const SE3& T_world_keyframe, const SE3& T_world_frame,
-                      CompressedRgbd images) {
+                      CompressedRgbd images, double max_depth_m) {
   Frame f;
   f.frame_index = frame_index;
   f.keyframe = keyframe;
+  f.max_depth_m = std::isfinite(max_depth_m) ? std::max(max_depth_m, 0.0) : 8.0;
   f.T_keyframe_frame = T_world_keyframe.inverse() * T_world_frame;
   f.T_world_fused = T_world_frame;
   f.images = std::move(images);
@@ -44,19 +64,22 @@ SE3 FusedFrames::anchored_pose(const Frame& f, const KeyframeMap& keyframes) con
   return keyframes[f.keyframe].T_world_camera * f.T_keyframe_frame;
 }
 
-void FusedFrames::schedule(const KeyframeMap& keyframes) {
-  std::vector<std::pair<double, size_t>> moved;  // (change, index)
+void FusedFrames::schedule(const KeyframeMap& keyframes, const PinholeCamera& camera, double voxel_m) {
+  std::vector<std::pair<double, size_t>> moved;  // (displacement, index)
+  const bool legacy = options_.min_translation_m > 0 || options_.min_rotation_deg > 0;
   for (size_t i = 0; i < frames_.size(); ++i) {
     const Frame& f = frames_[i];
     if (f.images.empty() || f.keyframe >= keyframes.size()) continue;
     const SE3 d = f.T_world_fused.inverse() * anchored_pose(f, keyframes);
-    const double t_m = d.translation().norm();
-    const double r_deg = d.angle_rad() * 180.0 / M_PI;
-    if (t_m <= options_.min_translation_m && r_deg <= options_.min_rotation_deg) continue;
-    // One scale for both: a degree moves a point 2 m away by ~3.5 cm.
-    moved.emplace_back(t_m + 0.035 * r_deg, i);
+    const double moved_m = correction_displacement_m(d, camera, f.max_depth_m);
+    if (!(moved_m > options_.min_displacement_vox * voxel_m)) continue;
+    if (legacy && d.translation().norm() <= options_.min_translation_m &&
+        d.angle_rad() * 180.0 / M_PI <= options_.min_rotation_deg)
+      continue;
+    moved.emplace_back(moved_m, i);
   }
-  std::sort(moved.begin(), moved.end());  // ascending: the most-changed ends at the back, taken first
+  // Ascending, ties by index: the most-displaced ends at the back and is taken first, the order fixed by the input.
+  std::sort(moved.begin(), moved.end());
   queue_.clear();
   for (const auto& m : moved) queue_.push_back(m.second);
 }

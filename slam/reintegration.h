@@ -1,21 +1,28 @@
 // A map that follows the corrected poses (BundleFusion, Dai et al. 2017): every frame fused into the TSDF is kept
 // (compressed, slam/keyframes.h CompressedRgbd) with the pose it was fused at and its anchor, the keyframe it was
 // tracked from. When loop closure moves keyframes, each frame's pose moves with its anchor
-// (T_world_frame = T_world_keyframe * T_keyframe_frame); the frames that moved by more than min_translation_m or
-// min_rotation_deg are re-fused (fusion::reintegrate: deintegrate at the old pose, integrate at the new one),
-// most-changed first: frames_after_loop of them at once after a closure, then frames_per_step per processed
-// frame so that tracking never stalls.
+// (T_world_frame = T_world_keyframe * T_keyframe_frame). Re-fusion is in proportion to what changed: a frame is
+// re-fused (fusion::reintegrate: deintegrate at the old pose, integrate at the new one) only when its correction
+// moves some voxel it fused by more than min_displacement_vox voxels (correction_displacement_m: the exact
+// largest displacement over the frame's view frustum out to the farthest depth it integrated), most-displaced
+// first: frames_after_loop of them at once after a closure, then frames_per_step per processed frame (offline) or
+// as many as fit budget_ms_per_frame (realtime), so that tracking never stalls.
 //
 //   FusedFrames fused(options);
-//   fused.add(index, keyframe, T_world_keyframe, T_world_frame, images);   // after each integrate()
-//   fused.schedule(keyframes);                                  // after a loop closure moved keyframes
+//   fused.add(index, keyframe, T_world_keyframe, T_world_frame, images, max_depth_m);  // after each integrate()
+//   fused.schedule(keyframes, camera, voxel_m);                 // after a loop closure moved keyframes
 //   fused.step(options.frames_per_step, grid, camera, params, &store);           // once per processed frame
 //   fused.refuse_all(keyframes, grid, camera, params, &store);  // --global: the whole map from the final poses
+//
+// The same correction is never applied twice: a frame remembers the pose it is fused at, and schedule() compares
+// the anchored pose with that, so a re-fused frame only comes back when its anchor moves again. The backlog
+// (pending()) never exceeds the frames stored with images (bounded by memory_budget_mb), each schedule() replaces
+// it (never adds to it), and the pipeline's finish() drains it to 0.
 //
 // Memory: beyond memory_budget_mb the oldest frames' images are dropped; such a frame stays fused at its old pose
 // (counted in dropped()). Re-fusion is exact up to the TSDF's quantisation while no voxel reached the weight cap
 // (fusion/deintegrate.h states what holds beyond it).
-// Thread-safety: none; the pipeline owns one.
+// Thread-safety: none; the pipeline owns one and uses it on its tracking thread, between frames.
 #pragma once
 
 #include <cstddef>
@@ -32,9 +39,16 @@ namespace hf::slam {
 
 struct ReintegrationOptions {
   bool enabled = true;
-  double min_translation_m = 0.005;  // a frame moved by more than this (or the rotation) is re-fused
-  double min_rotation_deg = 0.5;
-  int frames_per_step = 2;           // re-fusions per processed frame (~10 ms each at 640x480 on 2 cores)
+  // A frame is re-fused when its correction moves some voxel of its view by more than this many voxels: below
+  // half a voxel the re-fused TSDF would differ from the fused one by less than its own quantisation of the surface.
+  double min_displacement_vox = 0.5;
+  // Further, optional, thresholds (0 = off): the correction's translation or rotation must also exceed one of them.
+  double min_translation_m = 0.0;
+  double min_rotation_deg = 0.0;
+  int frames_per_step = 2;           // re-fusions per processed frame, offline (~10 ms each at 640x480 on 2 cores)
+  // Realtime mode (Pipeline::set_realtime): re-fusions continue between two frames while less than this has been
+  // spent on them (so one re-fusion can overrun it by its own length, ~10 ms); frames_per_step is then unused.
+  double budget_ms_per_frame = 10.0;
   // Re-fusions right after a loop closure moved the keyframes, before the next frame is tracked. The most-changed
   // frames are the ones just before the loop, whose surfaces the camera sees now: until they are re-fused, the
   // next frames track against them at their old poses and snap back by the correction. 16 on the synthetic lap
@@ -45,15 +59,22 @@ struct ReintegrationOptions {
   void validate() const;  // hf::Error naming the bad field
 };
 
+// The largest distance a point seen by `camera` out to depth range_m moves when its frame's pose changes by
+// T_old_new (= T_world_old^-1 * T_world_new): |T_old_new p - p| is convex in p, so its maximum over the view
+// frustum (a pyramid: the camera centre and the image corners at range_m) lies at one of those five points.
+double correction_displacement_m(const SE3& T_old_new, const PinholeCamera& camera, double range_m);
+
 class FusedFrames {
  public:
   explicit FusedFrames(const ReintegrationOptions& options = {});
 
   // `images` as the frame was fused (the pipeline compresses each frame once, for this store and the keyframes).
+  // max_depth_m: the farthest depth the frame integrated (bounds how far its correction can move a voxel).
   void add(size_t frame_index, size_t keyframe, const SE3& T_world_keyframe, const SE3& T_world_frame,
-           CompressedRgbd images);
-  // Queues the frames whose anchored pose moved past the thresholds since they were fused, most-changed first.
-  void schedule(const KeyframeMap& keyframes);
+           CompressedRgbd images, double max_depth_m = 8.0);
+  // Queues the frames whose anchored pose moved past the thresholds since they were fused, most-displaced first,
+  // replacing the queue. `camera` is the frames' camera, voxel_m the map's voxel size.
+  void schedule(const KeyframeMap& keyframes, const PinholeCamera& camera, double voxel_m);
   // Re-fuses up to n queued frames at their anchored poses; returns how many were re-fused.
   size_t step(size_t n, const KeyframeMap& keyframes, fusion::VoxelBlockGrid& grid, const PinholeCamera& camera,
               const fusion::IntegrateParams& params, fusion::BlockStore* store);
@@ -70,6 +91,7 @@ class FusedFrames {
  private:
   struct Frame {
     size_t frame_index = 0, keyframe = 0;
+    double max_depth_m = 8.0;
     SE3 T_keyframe_frame, T_world_fused;
     CompressedRgbd images;
   };

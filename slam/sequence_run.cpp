@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -9,6 +10,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <vector>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -30,11 +32,17 @@ Trajectory SequenceRun::estimate() const {
   Trajectory t;
   bool placed = false;  // frames lost before the map was initialised have no pose to report
   const bool have_corrected = corrected.size() == frames.size();
+  size_t dropped = 0;  // dropped_timestamps_s are in capture order, as the frames are
   for (size_t i = 0; i < frames.size(); ++i) {
     const FrameResult& f = frames[i];
+    // The frames dropped before this one arrived were shown at the pose of the frame before them.
+    for (; dropped < dropped_timestamps_s.size() && dropped_timestamps_s[dropped] < f.timestamp_s; ++dropped)
+      if (placed && !t.empty()) t.push_back({dropped_timestamps_s[dropped], t.back().T_world_camera});
     placed = placed || f.pose_valid;
     if (placed) t.push_back({f.timestamp_s, have_corrected ? corrected[i] : f.T_world_camera});
   }
+  for (; dropped < dropped_timestamps_s.size(); ++dropped)
+    if (!t.empty()) t.push_back({dropped_timestamps_s[dropped], t.back().T_world_camera});
   return t;
 }
 
@@ -65,6 +73,7 @@ SequenceRun run_sequence(FrameSource& source, Pipeline& pipeline, const RunContr
   if (!control.progress_label.empty())
     progress = std::make_unique<Progress>(control.progress_label,
                                           total == std::numeric_limits<long>::max() ? 0 : total);
+  if (control.realtime) pipeline.set_realtime(true);
   const auto start = std::chrono::steady_clock::now();
   long read = 0;
   double busy_ms = 0.0;
@@ -95,6 +104,9 @@ SequenceRun run_sequence(FrameSource& source, Pipeline& pipeline, const RunContr
       break;
     }
     r.ms.read = read_ms;
+    if (fr.frame.arrival)
+      run.latency_ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - *fr.frame.arrival).count());
     busy_ms += r.ms.total();
     if (control.on_frame) control.on_frame(r);
     if (control.observe) control.observe(fr.frame, r);
@@ -110,6 +122,12 @@ SequenceRun run_sequence(FrameSource& source, Pipeline& pipeline, const RunContr
   if (progress) progress->finish();
   run.finish_ms = pipeline.finish(control.global);
   run.corrected = pipeline.corrected_trajectory();
+  if (const std::optional<CaptureStats> stats = source.capture_stats()) {
+    // Only those before the last frame read: later ones arrived after the run stopped reading.
+    const double last_s = run.frames.empty() ? -1e300 : run.frames.back().timestamp_s;
+    for (double t : stats->dropped_timestamps_s)
+      if (t < last_s) run.dropped_timestamps_s.push_back(t);
+  }
   if (run.corrected.size() != run.frames.size()) run.corrected.clear();
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return run;
@@ -156,6 +174,16 @@ RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const Fra
   s.frames_bad = long(run.bad_frames.size());
   s.interrupted = run.interrupted;
   s.capture = source.capture_stats();
+  if (s.capture) s.capture->dropped_timestamps_s.clear();  // in the run (SequenceRun), not repeated here
+  s.realtime = pipeline.realtime();
+  if (!run.latency_ms.empty()) {
+    std::vector<double> l = run.latency_ms;
+    std::sort(l.begin(), l.end());
+    const auto at = [&](double q) { return l[std::min(l.size() - 1, size_t(std::ceil(q * double(l.size()))) - 1)]; };
+    s.latency_p50_ms = at(0.5);
+    s.latency_p95_ms = at(0.95);
+    s.latency_max_ms = l.back();
+  }
   const ColourCheck& colour = pipeline.colour_check();
   s.colour_verdict = to_string(colour.verdict());
   s.tracking_registration = pipeline.tracking_registration();
@@ -184,6 +212,12 @@ RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const Fra
     s.worst_frame_ms = std::max(s.worst_frame_ms, f.ms.total());
     s.loop_worst_ms = std::max(s.loop_worst_ms, f.ms.loop);
     s.frames_reintegrated += f.reintegrated;
+    s.refusion_backlog_max = std::max(s.refusion_backlog_max, f.refusion_backlog);
+    if (f.loop_applied) {
+      ++s.backend_jobs;
+      s.backend_job_mean_ms += f.backend_job_ms;
+      s.backend_job_worst_ms = std::max(s.backend_job_worst_ms, f.backend_job_ms);
+    }
     if (f.registration && f.state != TrackState::lost) {
       s.frames_degenerate += f.registration->status == RegistrationStatus::degenerate;
       s.frames_poor += f.registration->status == RegistrationStatus::poor;
@@ -207,7 +241,21 @@ RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const Fra
     s.mean_ms = {sum.read / n,     sum.preprocess / n, sum.track / n, sum.relocalise / n, sum.integrate / n,
                  sum.raycast / n, sum.keyframe / n,   sum.loop / n,  sum.reintegrate / n};
     s.fps = sum.total() > 0 ? 1000.0 * n / sum.total() : 0.0;
+    std::vector<double> totals;
+    totals.reserve(run.frames.size());
+    for (const auto& f : run.frames) totals.push_back(f.ms.total());
+    const size_t quarter = std::max<size_t>(1, totals.size() / 4);
+    double first = 0.0, last = 0.0;
+    for (size_t i = 0; i < quarter; ++i) {
+      first += totals[i];
+      last += totals[totals.size() - quarter + i];
+    }
+    s.first_quarter_ms = first / double(quarter);
+    s.last_quarter_ms = last / double(quarter);
+    std::sort(totals.begin(), totals.end());
+    s.p95_frame_ms = totals[std::min(totals.size() - 1, size_t(std::ceil(0.95 * double(totals.size()))) - 1)];
   }
+  if (s.backend_jobs > 0) s.backend_job_mean_ms /= double(s.backend_jobs);
   if (auto eval = try_evaluate(source.ground_truth(), run.estimate())) s.metrics = eval->metrics();
   if (auto eval = try_evaluate(source.ground_truth(), run.tracked_estimate()))
     s.ate_tracked_only_m = eval->metrics().ate_m.rmse;
@@ -250,14 +298,24 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
   j["loops_closed"] = s.loops_closed;
   j["frames_reintegrated"] = s.frames_reintegrated;
   j["loop_worst_ms"] = s.loop_worst_ms;
+  j["slam_backend"] = {{"jobs", s.backend_jobs},
+                       {"job_mean_ms", s.backend_job_mean_ms},
+                       {"job_worst_ms", s.backend_job_worst_ms},
+                       {"refusion_backlog_max", s.refusion_backlog_max},
+                       {"refusion_backlog_end", pipeline.fused_frames().pending()}};
+  j["frame_ms"] = {{"p95", s.p95_frame_ms}, {"first_quarter_mean", s.first_quarter_ms},
+                   {"last_quarter_mean", s.last_quarter_ms}, {"worst", s.worst_frame_ms}};
   j["finish_ms"] = s.finish_ms;
   j["interrupted"] = s.interrupted;
   j["stopped_by"] = run.stopped_by.empty() ? nlohmann::json(nullptr) : nlohmann::json(run.stopped_by);
   j["input_ended"] = run.input_ended.empty() ? nlohmann::json(nullptr) : nlohmann::json(run.input_ended);
+  j["realtime"] = s.realtime;
   if (s.capture)
     j["capture"] = {{"frames_captured", s.capture->captured}, {"frames_processed", s.capture->delivered},
                     {"frames_dropped", s.capture->dropped},   {"input_fps", s.capture->input_fps},
-                    {"processed_fps", s.capture->delivered_fps}};
+                    {"processed_fps", s.capture->delivered_fps},
+                    {"latency_ms", {{"p50", opt(s.latency_p50_ms)}, {"p95", opt(s.latency_p95_ms)},
+                                    {"max", opt(s.latency_max_ms)}}}};
   else
     j["capture"] = nullptr;
   j["ate_rmse_m"] = opt(s.ate_rmse_m());
@@ -288,6 +346,8 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
     if (!f.method.empty()) fj["method"] = f.method;
     if (f.loop_closed) fj["loop_closed"] = true;
     if (f.reintegrated) fj["reintegrated"] = f.reintegrated;
+    fj["refusion_backlog"] = f.refusion_backlog;
+    if (f.loop_applied) fj["backend_job_ms"] = f.backend_job_ms;
     if (f.registration) {
       fj["registration_status"] = hf::to_string(f.registration->status);
       fj["inlier_ratio"] = f.registration->inlier_ratio;
@@ -347,20 +407,34 @@ std::string report_markdown(const RunSummary& s, const SequenceRun& run, const F
      << "| keyframes | " << s.keyframes << ", " << s.loops_closed << " loops closed, " << s.frames_reintegrated
      << " frames re-fused (worst loop stage " << fmt(s.loop_worst_ms, 1) << " ms, finish " << fmt(s.finish_ms, 0)
      << " ms) |\n"
+     << "| back-end | " << s.backend_jobs << " jobs beside tracking (" << fmt(s.backend_job_mean_ms, 1)
+     << " ms mean, worst " << fmt(s.backend_job_worst_ms, 1) << " ms on the back-end thread); re-fusion backlog at "
+     << "most " << s.refusion_backlog_max << " frames, 0 after the run |\n"
      << (s.capture ? "| capture | " + std::to_string(s.capture->captured) + " frames in at " +
                          fmt(s.capture->input_fps, 1) + " fps, " + std::to_string(s.capture->delivered) +
                          " processed at " + fmt(s.capture->delivered_fps, 1) + " fps, " +
                          std::to_string(s.capture->dropped) + " dropped (processing slower than the sensor)" +
-                         (run.input_ended.empty() ? "" : "; input ended: " + run.input_ended) + " |\n"
+                         (run.input_ended.empty() ? "" : "; input ended: " + run.input_ended) + " |\n" +
+                         (s.latency_p50_ms ? "| latency | arrival to pose: p50 " + fmt(*s.latency_p50_ms, 1) +
+                                                 " ms, p95 " + fmt(*s.latency_p95_ms, 1) + " ms, max " +
+                                                 fmt(*s.latency_max_ms, 1) + " ms |\n"
+                                           : std::string())
                    : std::string())
-     << "| speed | " << fmt(s.fps, 1) << " fps (" << fmt(s.mean_ms.total(), 1) << " ms per frame, worst "
-     << fmt(s.worst_frame_ms, 1) << " ms) |\n"
+     << (s.realtime ? "| timing | realtime mode: back-end results applied when ready and re-fusion by its ms budget, "
+                      "so this run depends on the machine's timing |\n"
+                    : std::string())
+     << "| speed | " << fmt(s.fps, 1) << " fps (" << fmt(s.mean_ms.total(), 1) << " ms per frame, p95 "
+     << fmt(s.p95_frame_ms, 1) << ", worst " << fmt(s.worst_frame_ms, 1) << " ms; first quarter "
+     << fmt(s.first_quarter_ms, 1) << ", last quarter " << fmt(s.last_quarter_ms, 1) << " ms) |\n"
      << "| map | " << s.blocks_allocated << " blocks, " << fmt(double(s.memory_bytes) / (1 << 20), 1) << " MiB, "
      << fmt(s.bytes_per_voxel, 2) << " bytes per voxel |\n\n"
-     << "## Milliseconds per frame\n\n| read | preprocess | track | relocalise | integrate | raycast | keyframe | total |\n"
-     << "|---|---|---|---|---|---|---|---|\n| " << fmt(s.mean_ms.read, 1) << " | " << fmt(s.mean_ms.preprocess, 1)
+     << "## Milliseconds per frame (tracking thread)\n\n"
+     << "| read | preprocess | track | relocalise | integrate | raycast | keyframe | loop | re-fuse | total |\n"
+     << "|---|---|---|---|---|---|---|---|---|---|\n| " << fmt(s.mean_ms.read, 1) << " | "
+     << fmt(s.mean_ms.preprocess, 1)
      << " | " << fmt(s.mean_ms.track, 1) << " | " << fmt(s.mean_ms.relocalise, 1) << " | "
      << fmt(s.mean_ms.integrate, 1) << " | " << fmt(s.mean_ms.raycast, 1) << " | " << fmt(s.mean_ms.keyframe, 1)
+     << " | " << fmt(s.mean_ms.loop, 1) << " | " << fmt(s.mean_ms.reintegrate, 1)
      << " | " << fmt(s.mean_ms.total(), 1) << " |\n\n## Trajectory error (every frame, lost ones at their reported pose)\n\n";
   if (s.metrics) {
     md << format_metrics_markdown(*s.metrics);

@@ -36,6 +36,9 @@ struct RunControl {
   // After the last frame: Pipeline::finish(global): drain the re-fusion queue, or (global, `--global`) solve the
   // keyframe graph once more and fuse the map anew from the final poses.
   bool global = false;
+  // The pipeline's realtime mode (Pipeline::set_realtime): for live input and replay at the recorded rate
+  // (io/replay_source.h), whose results depend on timing anyway.
+  bool realtime = false;
 };
 
 struct SequenceRun {
@@ -48,6 +51,10 @@ struct SequenceRun {
   // Non-empty when a live source ended on its own (device unplugged or silent): FrameRead::message of its end.
   std::string input_ended;
   double wall_s = 0.0;                    // the whole loop
+  // Live sources: per processed frame, ms from its arrival in the capture queue to its pose (process() returned);
+  // and the time stamps of the frames the queue dropped (CaptureStats::dropped_timestamps_s).
+  std::vector<double> latency_ms;
+  std::vector<double> dropped_timestamps_s;
 
   long frames_lost() const;
   // Per frame, its pose after every loop closure (and the final optimisation with `global`):
@@ -56,7 +63,8 @@ struct SequenceRun {
   double finish_ms = 0.0;                 // Pipeline::finish()
   // The pose the run reports for EVERY processed frame (a lost frame's is the last estimate), TUM time stamps:
   // the corrected pose where there is one, else the online one. What trajectory.txt holds and ATE is computed
-  // over, so a lost frame is never left out of the error.
+  // over, so a lost frame is never left out of the error. A frame the live queue dropped is there too, at the pose
+  // the system showed when it arrived: the last processed frame's before it.
   Trajectory estimate() const;
   Trajectory online_estimate() const;     // the same with each frame's online pose (FrameResult::T_world_camera)  // (frames lost before the first placed frame have none)
   Trajectory tracked_estimate() const;    // only the frames with pose_valid (for comparison)
@@ -80,10 +88,21 @@ struct RunSummary {
   std::optional<double> ate_online_m;        // ATE RMSE of the online poses (before loop closures moved them)
   size_t loops_closed = 0;
   size_t frames_reintegrated = 0;
-  double loop_worst_ms = 0.0;               // the slowest loop-closure stage of a frame
+  double loop_worst_ms = 0.0;               // the slowest loop-closure stage of a frame (tracking thread)
+  // The back-end (slam/backend.h): jobs applied, their own time on the back-end thread (mean, worst), and the
+  // re-fusion backlog: the largest after any frame (FrameResult::refusion_backlog); finish() drains it to 0.
+  size_t backend_jobs = 0;
+  double backend_job_mean_ms = 0.0, backend_job_worst_ms = 0.0;
+  size_t refusion_backlog_max = 0;
+  // Per-frame cost over the session (stage totals, read included): p95, and the means of the first and the last
+  // quarter of the frames (a cost that grows with the session shows as last > first).
+  double p95_frame_ms = 0.0, first_quarter_ms = 0.0, last_quarter_ms = 0.0;
   double finish_ms = 0.0;
   bool interrupted = false;
   std::optional<CaptureStats> capture;       // live sources: frames in / processed / dropped and both rates
+  bool realtime = false;                     // Pipeline::realtime(): results depend on timing
+  // Live sources: arrival-to-pose latency over the processed frames (SequenceRun::latency_ms).
+  std::optional<double> latency_p50_ms, latency_p95_ms, latency_max_ms;
   std::optional<TrajectoryMetrics> metrics;  // ATE and RPE (1 s delta)
   // The colour check (slam/colour_check.h): its verdict, the median colour-to-depth scale of the window that
   // decided it, the frame it fell at, and the method that tracked at the end (colour_check.depth_only_registration

@@ -3,6 +3,8 @@
 # that would need real hardware skips with a message.
 if(TARGET hf_io_live)
   hf_test(test_io_live_source SOURCES test_live_source.cpp DEPS hf_io_live)
+  # A recording replayed at its recorded rate through the same queue (hashfusion run --realtime).
+  hf_test(test_io_replay_source SOURCES test_replay_source.cpp DEPS hf_io_live)
 endif()
 if(TARGET hf_io_live)
   set(pixel_formats_deps hf_io_live opencv_core opencv_imgcodecs)

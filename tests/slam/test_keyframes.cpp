@@ -152,10 +152,10 @@ TEST(FusedFrames, MovedFramesAreReFusedMostChangedFirst) {
     fusion::integrate(grid, wall, {}, cam, keys[k].T_world_camera);
     fused.add(k, k, keys[k].T_world_camera, keys[k].T_world_camera, CompressedRgbd::encode(wall, {}, 90));
   }
-  fused.schedule(keys);
+  fused.schedule(keys, cam, vp.voxel_m);
   EXPECT_EQ(fused.pending(), 0u);  // nothing moved
   keys.set_pose(1, keyframes_pose(0.1 + 0.03));
-  fused.schedule(keys);
+  fused.schedule(keys, cam, vp.voxel_m);
   ASSERT_EQ(fused.pending(), 1u);
   EXPECT_EQ(fused.step(5, keys, grid, cam, {}, nullptr), 1u);
   EXPECT_EQ(fused.pending(), 0u);

@@ -1,0 +1,38 @@
+# hashfusion run --realtime (issue 33): a recording replayed at its recorded rate through a camera's queue. The
+# report says the run was realtime and gives the capture counts and the arrival-to-pose latency; every frame of the
+# recording is in the trajectory (a dropped one at the pose the system showed). Counts of dropped frames depend on
+# the machine, so only their consistency is checked.
+file(REMOVE_RECURSE ${OUT})
+execute_process(COMMAND ${HASHFUSION} run --input synthetic:room --synthetic-frames 15 --camera ros --realtime
+                        --registration groundtruth --out ${OUT}
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "run --realtime failed (${rc}): ${err}")
+endif()
+file(READ ${OUT}/report.json json)
+string(JSON realtime GET "${json}" realtime)
+if(NOT realtime)
+  message(FATAL_ERROR "report.json: realtime is ${realtime}")
+endif()
+string(JSON captured GET "${json}" capture frames_captured)
+string(JSON processed GET "${json}" capture frames_processed)
+string(JSON dropped GET "${json}" capture frames_dropped)
+math(EXPR sum "${processed} + ${dropped}")
+if(NOT captured EQUAL 15 OR NOT sum EQUAL 15)
+  message(FATAL_ERROR "capture: ${captured} captured, ${processed} processed, ${dropped} dropped (15 frames fed)")
+endif()
+foreach(q p50 p95 max)
+  string(JSON latency GET "${json}" capture latency_ms ${q})
+  if(NOT latency GREATER 0)
+    message(FATAL_ERROR "latency ${q} is ${latency}")
+  endif()
+endforeach()
+file(STRINGS ${OUT}/trajectory.txt poses REGEX "^[0-9]")
+list(LENGTH poses n)
+if(NOT n EQUAL 15)
+  message(FATAL_ERROR "trajectory.txt has ${n} poses, the recording 15 frames")
+endif()
+file(READ ${OUT}/report.md md)
+if(NOT md MATCHES "latency" OR NOT md MATCHES "realtime mode")
+  message(FATAL_ERROR "report.md lacks the latency or the realtime note")
+endif()
