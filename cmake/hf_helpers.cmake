@@ -73,7 +73,11 @@ endfunction()
 function(hf_test_executable name)
   cmake_parse_arguments(A "" "COST" "SOURCES;LABELS;ENVIRONMENT" ${ARGN})
   add_executable(${name} ${A_SOURCES})
-  target_link_libraries(${name} PRIVATE GTest::gtest_main)
+  if(NOT TARGET hf_gtest_suite_main)
+    add_library(hf_gtest_suite_main OBJECT ${PROJECT_SOURCE_DIR}/tests/common/gtest_suite_main.cpp)
+    target_link_libraries(hf_gtest_suite_main PUBLIC GTest::gtest PRIVATE hf_warnings)
+  endif()
+  target_link_libraries(${name} PRIVATE hf_gtest_suite_main)
   hf_test_common_flags(${name})
   if(HF_PCH)
     if(NOT TARGET hf_test_pch)
@@ -87,26 +91,37 @@ function(hf_test_executable name)
     endif()
     target_precompile_headers(${name} REUSE_FROM hf_test_pch)
   endif()
-  include(GoogleTest)
-  # ENVIRONMENT: VAR=value entries for the tests' processes (over the test preset's environment). An empty LABELS
-  # value is dropped by the discovery script, which would make ENVIRONMENT the label: name it only when set.
+  # One CTest test per GoogleTest suite (cmake/hf_gtest_suites.cmake says why), discovered after each link like
+  # gtest_discover_tests does. The main() (tests/common/gtest_suite_main.cpp) exits 77 when a suite only skipped.
+  # ENVIRONMENT: VAR=value entries for the tests' processes (over the test preset's environment).
   # COST: CTest starts tests in descending cost; on a fresh clone it has no timings of its own yet, so the few
   # tests of a minute or more say so and start first instead of ending the suite alone on one core.
-  set(properties)
+  set(properties "")
   if(A_LABELS)
-    list(APPEND properties LABELS "${A_LABELS}")
+    string(APPEND properties " LABELS [==[${A_LABELS}]==]")
   endif()
   if(A_ENVIRONMENT)
-    list(APPEND properties ENVIRONMENT "${A_ENVIRONMENT}")
+    string(APPEND properties " ENVIRONMENT [==[${A_ENVIRONMENT}]==]")
   endif()
   if(A_COST)
-    list(APPEND properties COST "${A_COST}")
+    string(APPEND properties " COST ${A_COST}")
   endif()
-  if(properties)
-    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES ${properties})
-  else()
-    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60)
-  endif()
+  set(props_file ${CMAKE_CURRENT_BINARY_DIR}/${name}_suite_properties.cmake)
+  file(CONFIGURE OUTPUT ${props_file} CONTENT "set(HF_TEST_PROPERTIES_TEXT [===[@properties@]===])\n" @ONLY)
+  set(ctest_file ${CMAKE_CURRENT_BINARY_DIR}/${name}_suites.cmake)
+  add_custom_command(TARGET ${name} POST_BUILD
+    COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:${name}> -DOUT=${ctest_file} -DWORKDIR=${CMAKE_CURRENT_BINARY_DIR}
+            -DPROPS=${props_file} -P ${PROJECT_SOURCE_DIR}/cmake/hf_gtest_suites.cmake
+    VERBATIM)
+  set(include_file ${CMAKE_CURRENT_BINARY_DIR}/${name}_suites_include.cmake)
+  file(CONFIGURE OUTPUT ${include_file} CONTENT
+"if(EXISTS [==[@ctest_file@]==])
+  include([==[@ctest_file@]==])
+else()
+  add_test(@name@_NOT_BUILT @name@_NOT_BUILT)
+endif()
+" @ONLY)
+  set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES ${include_file})
 endfunction()
 
 # hf_fuzzer(NAME SOURCES... DEPS ... [SECONDS n]): a libFuzzer target (clang, HF_FUZZ=ON) plus a CTest test that

@@ -77,7 +77,7 @@ TEST(TumList, MalformedLinesNameFileAndLine) {
   }
 }
 
-TEST(TumGroundTruth, ExactMidpointPose) {
+TEST(TumGroundTruthLookup, ExactMidpointPose) {
   // Pure translation: the geodesic midpoint is the arithmetic one.
   hf::Trajectory line = {{10.0, hf::SE3()}, {10.01, hf::SE3(Eigen::Quaterniond::Identity(), {0.2, -0.4, 1.0})}};
   const auto mid = hf::interpolate_pose(line, 10.005, 0.02);
@@ -101,7 +101,7 @@ TEST(TumGroundTruth, ExactMidpointPose) {
   EXPECT_NEAR((at_b->matrix() - b.matrix()).cwiseAbs().maxCoeff(), 0.0, 1e-12);
 }
 
-TEST(TumGroundTruth, AbsentWhenNoSampleWithinTolerance) {
+TEST(TumGroundTruthLookup, AbsentWhenNoSampleWithinTolerance) {
   const hf::Trajectory gt = {{0.0, hf::SE3()}, {1.0, hf::SE3(Eigen::Quaterniond::Identity(), {1, 0, 0})}};
   EXPECT_FALSE(hf::interpolate_pose(gt, 0.5, 0.02));   // a gap in the motion capture
   ASSERT_TRUE(hf::interpolate_pose(gt, 0.015, 0.02));  // near the first sample: interpolated
