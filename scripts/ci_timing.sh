@@ -52,7 +52,8 @@ total_start=$SECONDS
 for preset in release asan; do
   phase "configure_$preset" cmake --preset "$preset" || break
   phase "build_$preset" cmake --build --preset "$preset" || break
-  phase "suite_$preset" ctest --preset "$preset" || true
+  # The JUnit file keeps every test's output (the console shows only failures'), for the GoogleTest case counts.
+  phase "suite_$preset" ctest --preset "$preset" --output-junit "$clone/ci_timing_suite_${preset}.xml" || true
 done
 total=$((SECONDS - total_start))
 
@@ -84,6 +85,15 @@ total=$((SECONDS - total_start))
       skipped=$(grep -cE '\((Skipped|Not Run)\)$' "$log" || true)
       echo
       echo "$preset suite: $summary; $skipped reported skipped (Not Run / SKIP_RETURN_CODE / GTEST_SKIP)"
+    fi
+    output="$clone/ci_timing_suite_${preset}.xml"
+    if [[ -f "$output" ]]; then
+      # CTest runs a GoogleTest suite per process; its cases are counted from GoogleTest's own result lines.
+      passed=$(grep -cE '\[       OK \] [^ ]+\.[^ ]+ \(' "$output" || true)
+      gskipped=$(grep -cE '\[  SKIPPED \] [^ ]+\.[^ ]+ \(' "$output" || true)
+      gfailed=$(grep -cE '\[  FAILED  \] [^ ]+\.[^ ]+ \(' "$output" || true)
+      echo
+      echo "$preset GoogleTest cases: $passed passed, $gskipped skipped, $gfailed failed"
     fi
     if [[ -f "$cost" ]]; then
       echo
