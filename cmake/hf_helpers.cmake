@@ -37,8 +37,9 @@ endfunction()
 # instead of one per test file): every hf_test of a folder with the same LABELS and no ENVIRONMENT adds its sources
 # and DEPS to that folder's executable (hf_tests_FOLDER[_LABELS]), and NAME becomes an ALIAS of it, so
 # $<TARGET_FILE:NAME> still runs those tests (with the others of the folder: filter with --gtest_filter). CTest
-# still sees every test by its GoogleTest name, each run in its own process. A test with ENVIRONMENT keeps its own
-# executable. Extra link or include needs go through DEPS / SYSTEM_INCLUDES, not target_* calls on NAME.
+# sees one test per GoogleTest suite, run in its own process (cmake/hf_gtest_suites.cmake). A test with
+# ENVIRONMENT keeps its own executable. Extra link or include needs go through DEPS / SYSTEM_INCLUDES, not
+# target_* calls on NAME.
 function(hf_test name)
   cmake_parse_arguments(A "" "COST" "SOURCES;DEPS;LABELS;ENVIRONMENT;SYSTEM_INCLUDES" ${ARGN})
   if(HF_UNITY AND NOT A_ENVIRONMENT)
