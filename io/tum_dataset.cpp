@@ -118,7 +118,14 @@ TumDataset::TumDataset(const std::string& folder, const DatasetOptions& options)
   const std::vector<TumListEntry> rgb = read_tum_list((dir / "rgb.txt").string());
   const std::vector<TumListEntry> depth = read_tum_list((dir / "depth.txt").string());
   const fs::path gt_path = dir / "groundtruth.txt";
-  if (fs::exists(gt_path, ec)) ground_truth_ = read_tum_trajectory(gt_path.string());
+  // Absent means no entry at all: a symbolic link that does not resolve (a loop, a missing target) is the user's
+  // ground truth gone wrong, refused like a folder there, not a run without ground truth.
+  if (fs::exists(fs::symlink_status(gt_path, ec))) {
+    if (fs::is_symlink(fs::symlink_status(gt_path, ec)) && !fs::exists(gt_path, ec))
+      throw Error(gt_path.string() + ": a symbolic link that does not resolve (" +
+                  (ec ? ec.message() : std::string("missing target")) + ")");
+    ground_truth_ = read_tum_trajectory(gt_path.string());
+  }
   camera_ = choose_tum_camera(folder, options.camera);
 
   std::vector<double> rgb_stamps, depth_stamps;
