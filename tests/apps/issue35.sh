@@ -144,6 +144,24 @@ lidar_transaction)  # 35 (build): `lidar`'s outputs as one transaction, like `ru
   [ -z "$(ls -A . | grep '^\.o\.run-')" ] || fail "private folders left: $(ls -A .)"
   [ -z "$(find o -name '*.tmp*')" ] || fail "temporaries left: $(find o -name '*.tmp*')"
   ;;
+bench_transaction)  # 35 (build): `bench`'s outputs as one transaction, like `run`'s
+  mkdir o && echo "my notes" > o/notes.txt
+  "$HF" bench --input synthetic:wall --synthetic-frames 3 --registration icp --peers none --out o > log 2>&1 ||
+    fail "first bench: $(cat log)"
+  for f in results.md results.json results.csv speed_vs_error.png notes.txt; do
+    [ -f o/$f ] || fail "o/$f missing after the first bench"
+  done
+  grep -q "$ROOT/o/results.md" log || fail "the outputs listed are not where they ended up: $(cat log)"
+  cp o/results.json first.json
+  # A bench that fails after the transaction began (its input does not exist) leaves o as it was.
+  "$HF" bench --input no_such_folder --registration icp --peers none --out o > log 2>&1 && fail "missing input: exit 0"
+  cmp -s o/results.json first.json || fail "a failed bench changed o/results.json"
+  # --merge into the same folder replaces the run's files and keeps the user's.
+  "$HF" bench --merge o --out o > log 2>&1 || fail "merge into o: $(cat log)"
+  [ "$(cat o/notes.txt)" = "my notes" ] || fail "the user's notes.txt was lost"
+  [ -f o/results.md ] || fail "merge wrote no results.md"
+  [ -z "$(ls -A . | grep '^\.o\.run-')" ] || fail "private folders left: $(ls -A .)"
+  ;;
 *)
   fail "unknown case"
   ;;
