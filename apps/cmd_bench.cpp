@@ -1,15 +1,22 @@
 // `hashfusion bench`: every registration (and the PCL peers) on every input, with one pipeline configuration;
 // results.{md,json,csv}, won-lost-tie tables and speed/error plots (bench/harness/harness.h, bench/README.md).
 #include <CLI/CLI.hpp>
+#include <sys/stat.h>
+
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "apps/commands.h"
 #include "apps/interrupt.h"
 #include "bench/harness/harness.h"
+#include "core/bounded_read.h"
 #include "core/error.h"
+#include "core/output_transaction.h"
 
 namespace hf::apps {
 namespace {
@@ -46,11 +53,44 @@ std::string number(double v) {
   return s.str();
 }
 
+// What the bench run that last wrote `out` wrote there: results.{md,json,csv}, its plots and trajectories/, when
+// its results.json is a bench's; none for any other folder, so a user's files are always carried over.
+std::function<bool(const std::string&)> previous_bench_run_wrote(const std::string& out) {
+  bool bench_folder = false;
+  const std::string results = out + "/results.json";
+  struct stat st {};
+  if (::lstat(results.c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
+    try {
+      bench::results_from_json(nlohmann::json::parse(read_regular_file(results, "previous results")), results);
+      bench_folder = true;
+    } catch (const std::exception&) {
+      bench_folder = false;
+    }
+  }
+  return [bench_folder](const std::string& name) {
+    return bench_folder && (name == "results.md" || name == "results.json" || name == "results.csv" ||
+                            name == "trajectories" || name == "synthetic_cache" ||
+                            (name.starts_with("speed_vs_error") && name.ends_with(".png")));
+  };
+}
+
+// A path the harness wrote into the transaction's private folder, as it reads once the folder is in place.
+std::string final_path(const std::string& f, const OutputTransaction& outputs) {
+  const std::string& staged = outputs.folder();
+  const std::string rest = f.compare(0, staged.size(), staged) == 0 ? f.substr(staged.size()) : f;
+  return std::filesystem::absolute(outputs.target() + rest).string();
+}
+
 void run_bench_command(const BenchCliOptions& c) {
+  // The outputs as one transaction (core/output_transaction.h), as `run`'s: built in a private folder beside --out
+  // and exchanged with it at the end, so an interruption or a failure leaves the previous set or the new one.
+  OutputTransaction outputs(c.out);
   if (!c.merge.empty()) {
-    const bench::BenchReport report = bench::merge_bench(c.merge, c.out, bench::build_source_dir(), c.command_line);
+    const bench::BenchReport report =
+        bench::merge_bench(c.merge, outputs.folder(), bench::build_source_dir(), c.command_line);
+    outputs.commit(previous_bench_run_wrote(outputs.target()));
     std::cout << "outputs:\n";
-    for (const std::string& f : report.files) std::cout << "  " << std::filesystem::absolute(f).string() << "\n";
+    for (const std::string& f : report.files) std::cout << "  " << final_path(f, outputs) << "\n";
     return;
   }
   bench::BenchOptions o;
@@ -58,7 +98,7 @@ void run_bench_command(const BenchCliOptions& c) {
   o.registrations = bench::resolve_registrations(c.registration);
   o.peers = bench::resolve_peers(c.peers);
   o.loop_closure_modes = bench::resolve_loop_closure_modes(c.loop_closure);
-  o.out = c.out;
+  o.out = outputs.folder();
   o.voxel_m = c.voxel_m;
   o.backend = c.backend;
   o.config_file = c.config_file;
@@ -73,16 +113,17 @@ void run_bench_command(const BenchCliOptions& c) {
   InterruptGuard guard;  // Ctrl-C / SIGTERM: finish the current run, write the results, exit 130 / 143
   o.stop = guard.flag();
   const bench::BenchReport report = bench::run_bench(o);
+  outputs.commit(previous_bench_run_wrote(outputs.target()));
 
   std::cout << "outputs:\n";
   size_t shown = 0;
   for (const std::string& f : report.files) {
     if (f.find("/trajectories/") != std::string::npos) continue;
-    std::cout << "  " << std::filesystem::absolute(f).string() << "\n";
+    std::cout << "  " << final_path(f, outputs) << "\n";
     ++shown;
   }
   if (shown < report.files.size()) {
-    std::cout << "  " << std::filesystem::absolute(o.out + "/trajectories").string() << "/ ("
+    std::cout << "  " << std::filesystem::absolute(outputs.target() + "/trajectories").string() << "/ ("
               << report.files.size() - shown << " trajectories)\n";
   }
   guard.exit_if_interrupted("results cover the runs finished so far");

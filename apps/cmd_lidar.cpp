@@ -2,14 +2,21 @@
 // run, one tile of a tiled run, or the merge of a tiled run (lidar/tiling.h). Writes classes.png (with a legend),
 // classes.tif (GeoTIFF), buildings.png, report.md and report.json to --out.
 #include <CLI/CLI.hpp>
+#include <sys/stat.h>
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <iostream>
+#include <optional>
+#include <set>
 #include <sstream>
 
 #include "apps/commands.h"
 #include "core/atomic_file.h"
+#include "core/bounded_read.h"
 #include "core/error.h"
+#include "core/output_transaction.h"
 #include "io/las.h"
 #include "lidar/class_raster_io.h"
 #include "lidar/footprints.h"
@@ -26,7 +33,43 @@ struct LidarArgs {
   std::string areas, sweep, tiles, merge, footprints, footprint_layer;
   int tile = -1, epsg = 0;
   double max_height_m = 120.0, max_building_m = 300.0;
+  std::string shown_out;  // --out as the user gave it, for messages (out is the transaction's private folder)
 };
+
+// Every file a lidar run (single or merge) writes into --out. Tile tasks (--tile K) write only tile_K.hflt, into a
+// folder they share by design, and take no transaction.
+const std::vector<std::string>& lidar_output_names() {
+  static const std::vector<std::string> names = {"classes.png", "classes.tif", "buildings.png",
+                                                 "report.json", "report.md",   "synthetic.las"};
+  return names;
+}
+
+// What the lidar run that last wrote `out` wrote there: the names its report.json lists under "outputs" (among
+// the names a lidar run writes), or all of those for a lidar report from before that list; none for a folder
+// without a lidar report.json (a user's folder, another command's report), so every file there is carried over.
+std::function<bool(const std::string&)> previous_lidar_run_wrote(const std::string& out) {
+  std::set<std::string> names;
+  const std::string report = out + "/report.json";
+  struct stat st {};
+  if (::lstat(report.c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
+    try {
+      const nlohmann::json j = nlohmann::json::parse(read_regular_file(report, "previous report"));
+      if (j.is_object() && j.contains("parameters") && j.contains("grid") && j.contains("classes")) {
+        const auto& known = lidar_output_names();
+        if (j.contains("outputs") && j["outputs"].is_array()) {
+          for (const nlohmann::json& name : j["outputs"])
+            if (name.is_string() && std::count(known.begin(), known.end(), name.get<std::string>()) > 0)
+              names.insert(name.get<std::string>());
+        } else {
+          names.insert(known.begin(), known.end());
+        }
+      }
+    } catch (const std::exception&) {
+      names.clear();
+    }
+  }
+  return [names](const std::string& name) { return names.count(name) > 0; };
+}
 
 std::vector<double> numbers(const std::string& text, const std::string& option) {
   std::vector<double> v;
@@ -63,7 +106,7 @@ std::pair<int, int> tile_counts(const std::string& text) {
 }
 
 // Rasters and tables of a finished classification (single or merged), with footprint / class validation.
-void write_outputs(const LidarArgs& a, lidar::Report& report, const lidar::BuiltUpRaster& r, const lidar::Mask* footprint_truth,
+std::string write_outputs(const LidarArgs& a, lidar::Report& report, const lidar::BuiltUpRaster& r, const lidar::Mask* footprint_truth,
                    const lidar::Mask* coverage) {
   report.raster = &r;
   if (footprint_truth) report.building_mask = lidar::compare_masks(r.s, *footprint_truth, coverage);
@@ -71,12 +114,12 @@ void write_outputs(const LidarArgs& a, lidar::Report& report, const lidar::Built
   lidar::write_class_geotiff(a.out + "/classes.tif", r.classes, r.grid, report.epsg);
   lidar::write_mask_png(a.out + "/buildings.png", r.s, footprint_truth);
   lidar::write_report(a.out, report);
-  std::cout << lidar::report_markdown(report) << "\noutputs in " << a.out << "\n";
+  return lidar::report_markdown(report);
 }
 
 // The merge of a tiled run, streamed (lidar/tiling.h): bands of rows go straight into classes.png, classes.tif
 // and buildings.png (and into the footprint comparison), so the whole grid is never in memory.
-void run_merge(const LidarArgs& a, const lidar::BuiltUpOptions& o, lidar::Report& report) {
+std::string run_merge(const LidarArgs& a, const lidar::BuiltUpOptions& o, lidar::Report& report) {
   std::vector<std::string> paths;
   for (const auto& e : std::filesystem::directory_iterator(a.merge))
     if (e.path().extension() == ".hflt") paths.push_back(e.path().string());
@@ -115,14 +158,28 @@ void run_merge(const LidarArgs& a, const lidar::BuiltUpOptions& o, lidar::Report
   const lidar::BuiltUpRaster stats{summary.grid, {}, {}, summary.stats};
   report.raster = &stats;
   lidar::write_report(a.out, report);
-  std::cout << lidar::report_markdown(report) << "\noutputs in " << a.out << "\n";
+  const std::string markdown = lidar::report_markdown(report);
+  report.raster = nullptr;  // `stats` ends here
+  return markdown;
 }
 
 void run_lidar(LidarArgs a) {
-  prepare_output_folder(a.out);
+  lidar::check_epsg(a.epsg, "--epsg");  // before any output exists: a code GDAL does not know is a usage error
   lidar::BuiltUpOptions o = options_of(a);
   lidar::Report report;
   report.options = o;
+  report.outputs = {"classes.png", "classes.tif", "buildings.png", "report.json", "report.md"};
+  a.shown_out = a.out;
+  // A single run or a merge builds its files in a private folder that replaces --out in one step at the end
+  // (core/output_transaction.h): an interruption leaves the previous complete set or the new one, never a mix.
+  std::optional<OutputTransaction> outputs;
+  const bool tile_task = a.merge.empty() && !a.tiles.empty();
+  if (tile_task) {
+    prepare_output_folder(a.out);
+  } else {
+    outputs.emplace(a.out);
+    a.out = outputs->folder();
+  }
 
   // Synthetic settlements: written as LAS so the run reads them like any survey; their truth validates the run.
   std::optional<lidar::SyntheticSettlements> scene;
@@ -137,18 +194,33 @@ void run_lidar(LidarArgs a) {
     h.scale[0] = h.scale[1] = h.scale[2] = 0.001;
     a.inputs = {a.out + "/synthetic.las"};
     write_las(a.inputs[0], h, scene->points);
+    report.outputs.push_back("synthetic.las");
   }
   report.inputs = a.inputs;
+  if (scene) report.inputs = {a.shown_out + "/synthetic.las"};  // where it will be, not the private folder
 
   lidar::Grid grid;
   if (!a.merge.empty()) {
-    run_merge(a, o, report);
+    const std::string markdown = run_merge(a, o, report);
+    outputs->commit(previous_lidar_run_wrote(outputs->target()));
+    std::cout << markdown << "\noutputs in " << a.shown_out << "\n";
     return;
   }
 
   if (a.inputs.empty()) throw Error("--input: at least one LAS file (or synthetic:SEED)");
   grid = lidar::grid_of_files(a.inputs, o.cell_m);
-  report.epsg = a.epsg > 0 ? a.epsg : las_epsg(LasReader(a.inputs[0]).header());
+  report.epsg = a.epsg;
+  if (report.epsg == 0) {
+    // A code the file states but GDAL does not know (a local or withdrawn one) leaves the outputs without a CRS,
+    // as a file stating none does; said once, so it is not silent.
+    report.epsg = las_epsg(LasReader(a.inputs[0]).header());
+    try {
+      lidar::check_epsg(report.epsg, a.inputs[0]);
+    } catch (const Error& e) {
+      std::fprintf(stderr, "hashfusion lidar: %s; the outputs get no CRS (give --epsg)\n", e.what());
+      report.epsg = 0;
+    }
+  }
 
   if (!a.tiles.empty()) {
     const auto [nx, ny] = tile_counts(a.tiles);
@@ -185,7 +257,10 @@ void run_lidar(LidarArgs a) {
   }
   if (class_truth) report.validation = lidar::compare_classes(b.profile.classes, *class_truth);
   const lidar::BuiltUpRaster result = lidar::built_up_raster(b, grid);
-  write_outputs(a, report, result, truth ? &*truth : nullptr, coverage ? &*coverage : nullptr);
+  const std::string markdown =
+      write_outputs(a, report, result, truth ? &*truth : nullptr, coverage ? &*coverage : nullptr);
+  outputs->commit(previous_lidar_run_wrote(outputs->target()));
+  std::cout << markdown << "\noutputs in " << a.shown_out << "\n";
 }
 
 }  // namespace

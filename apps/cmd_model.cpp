@@ -2,16 +2,23 @@
 // shots (OpenMVS dump, Middlebury *_par.txt or a hashfusion run folder) and SKETCH.json in, the 3D polygons, their
 // guidance states, textures and per-shot overlays out (photogrammetry/model_outputs.h).
 #include <CLI/CLI.hpp>
+#include <sys/stat.h>
+
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <sstream>
 #include <memory>
+#include <set>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
 #include "core/atomic_file.h"
 #include "core/bounded_read.h"
 #include "core/error.h"
+#include "core/output_transaction.h"
 #include "io/ply.h"
 #include "photogrammetry/model_outputs.h"
 #include "photogrammetry/scene_readers.h"
@@ -26,6 +33,7 @@ namespace {
 
 struct ModelArgs {
   std::string shots, polygons, out, cloud, dataset, events;
+  std::string shown_out;  // --out as given, for messages (out is the transaction's private folder)
   bool interactive = false;
   bool all_frames = false, snap = false, transfer = false, no_textures = false, no_overlays = false;
   double acceptance_h = photogrammetry::CloudFitOptions{}.acceptance_h;
@@ -58,15 +66,34 @@ std::string sketch_interactively(const photogrammetry::Network& network, photogr
     throw Error("--interactive: the viewer is not built in (install libglfw3-dev and libglm-dev, reconfigure)");
 #endif
   }
-  prepare_output_folder(a.out);
   const std::string path = (std::filesystem::path(a.out) / "sketch.json").string();
   write_file_atomically(path, [&](std::ostream& os) { os << photogrammetry::format_sketch_json(session.sketch()); });
-  std::cout << "sketch: " << path << " (" << session.sketch().polygons.size() << " polygons)\n";
+  std::cout << "sketch: " << (std::filesystem::path(a.shown_out) / "sketch.json").string() << " ("
+            << session.sketch().polygons.size() << " polygons)\n";
   *out = session.sketch();
   return path;
 }
 
-void run_model(const ModelArgs& a) {
+// What the model run that last wrote `out` wrote there (photogrammetry/model_outputs.h's names): all of them when
+// its polygons.json is a model's, none for any other folder, so a user's files are always carried over.
+std::function<bool(const std::string&)> previous_model_run_wrote(const std::string& out) {
+  static const std::set<std::string> kModelOutputs = {"polygons.json", "model.obj", "model.mtl", "transferred.json",
+                                                      "sketch.json",   "textures",  "overlays"};
+  bool model_folder = false;
+  const std::string polygons = out + "/polygons.json";
+  struct stat st {};
+  if (::lstat(polygons.c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
+    try {
+      const nlohmann::json j = nlohmann::json::parse(read_regular_file(polygons, "previous polygons"));
+      model_folder = j.is_object() && j.contains("polygons") && j["polygons"].is_array();
+    } catch (const std::exception&) {
+      model_folder = false;
+    }
+  }
+  return [model_folder](const std::string& name) { return model_folder && kModelOutputs.count(name) > 0; };
+}
+
+void run_model(ModelArgs a) {
   photogrammetry::RunShotsOptions run;
   run.dataset = a.dataset;
   run.keyframes_only = !a.all_frames;
@@ -90,8 +117,17 @@ void run_model(const ModelArgs& a) {
   if (!a.polygons.empty()) sketch = photogrammetry::read_sketch(a.polygons);
   else if (!a.interactive && a.events.empty())
     throw Error("model: --polygons SKETCH.json is required (or --interactive / --events to sketch)");
-  if (a.interactive || !a.events.empty()) sketch_name = sketch_interactively(network, std::move(sketch), a, o, &sketch);
+  // The outputs as one transaction (core/output_transaction.h), as `run`'s: built in a private folder beside --out
+  // and exchanged with it at the end, so an interruption or a failure leaves the previous set or the new one.
+  OutputTransaction outputs(a.out);
+  a.shown_out = a.out;
+  a.out = outputs.folder();
+  if (a.interactive || !a.events.empty()) {
+    sketch_interactively(network, std::move(sketch), a, o, &sketch);
+    sketch_name = (std::filesystem::path(a.shown_out) / "sketch.json").string();
+  }
   const photogrammetry::ModelJobResult r = photogrammetry::run_model_job(network, sketch, sketch_name, a.out, o);
+  outputs.commit(previous_model_run_wrote(outputs.target()));
   std::cout << network.source << ": " << network.shots.size() << " shots, " << network.cloud.size()
             << " cloud points, " << r.model.segments.size() << " planar segments\n";
   for (const auto& p : r.model.polygons)
@@ -106,7 +142,7 @@ void run_model(const ModelArgs& a) {
               << "\n";
   }
   if (a.transfer) std::cout << "  " << r.transfers.size() << " transferred views in transferred.json\n";
-  std::cout << "outputs in " << a.out << " (polygons.json, model.obj, " << r.written.size() << " files)\n";
+  std::cout << "outputs in " << a.shown_out << " (polygons.json, model.obj, " << r.written.size() << " files)\n";
 }
 
 }  // namespace

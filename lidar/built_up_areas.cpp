@@ -67,8 +67,23 @@ Grid grid_of_files(const std::vector<std::string>& files, double cell_m) {
   }
 }
 
+namespace {
+
+// Usable points (CellRaster::add's filter) of `pts` that lie outside `grid`.
+std::uint64_t las_points_outside_grid(const std::vector<LasPoint>& pts, const Grid& grid) {
+  std::uint64_t n = 0;
+  for (const LasPoint& p : pts) {
+    if (p.withheld || !std::isfinite(p.x) || !std::isfinite(p.y) || !(std::abs(p.z) <= 1e6)) continue;
+    int c, r;
+    if (!grid.cell_of(p.x, p.y, c, r)) ++n;
+  }
+  return n;
+}
+
+}  // namespace
+
 CellRaster rasterise_files(const std::vector<std::string>& files, const Grid& grid, const PointClasses& classes,
-                           bool progress, OutsideGrid outside) {
+                           bool progress, OutsideGrid outside, const Grid* whole) {
   CellRaster raster(grid);
   std::uint64_t total = 0;
   for (const std::string& f : files) total += LasReader(f).header().point_count;
@@ -79,12 +94,14 @@ CellRaster rasterise_files(const std::vector<std::string>& files, const Grid& gr
   for (const std::string& f : files) {
     LasReader reader(f);
     const std::uint64_t outside_before = raster.outside;
+    std::uint64_t outside_whole = 0;
     while (reader.read_chunk(chunk, 1 << 18)) {
       raster.add(chunk, classes);
+      if (whole && outside == OutsideGrid::refuse) outside_whole += las_points_outside_grid(chunk, *whole);
       done += chunk.size();
       if (bar) bar->update(static_cast<long>(done));
     }
-    const std::uint64_t lost = raster.outside - outside_before;
+    const std::uint64_t lost = whole ? outside_whole : raster.outside - outside_before;
     if (outside == OutsideGrid::refuse && lost > 0) {
       const LasHeader& h = reader.header();
       throw Error(f + ": " + std::to_string(lost) + " of " + std::to_string(h.point_count) +

@@ -46,8 +46,11 @@ Grid grid_of_files(const std::vector<std::string>& las_files, double cell_m);
 enum class OutsideGrid { skip, refuse };
 
 // Streams every file's points into a raster on `grid`; `progress` draws a bar. Throws hf::Error as LasReader, and
-// with OutsideGrid::refuse for a file with points outside the grid (counted over the whole file).
+// with OutsideGrid::refuse for a file with points outside `whole` (default: `grid` itself; a tile passes the grid
+// its window belongs to, so the window's own edges skip points and only the header's lie refuses), counted over
+// the whole file.
 CellRaster rasterise_files(const std::vector<std::string>& las_files, const Grid& grid, const PointClasses& classes,
-                           bool progress = false, OutsideGrid outside = OutsideGrid::skip);
+                           bool progress = false, OutsideGrid outside = OutsideGrid::skip,
+                           const Grid* whole = nullptr);
 
 }  // namespace hf::lidar

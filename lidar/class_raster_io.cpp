@@ -65,6 +65,19 @@ void ClassPngWriter::close() {
   png_.close();
 }
 
+void check_epsg(int epsg, const std::string& what) {
+  if (epsg == 0) return;
+  // EPSG codes are positive and below 10^6 (the registry's largest is six digits); PROJ is asked for the rest.
+  bool known = epsg > 0 && epsg < 1000000;
+  if (known) {
+    const QuietGdal quiet;  // PROJ's own "crs not found" line would be a second message
+    OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+    known = OSRImportFromEPSG(srs, epsg) == OGRERR_NONE;
+    OSRDestroySpatialReference(srs);
+  }
+  if (!known) throw Error(what + ": EPSG:" + std::to_string(epsg) + " is not a coordinate reference system GDAL knows");
+}
+
 ClassGeoTiffWriter::ClassGeoTiffWriter(const std::string& path, const Grid& grid, int epsg)
     : path_(path), width_(grid.width), height_(grid.height) {
   if (grid.width <= 0 || grid.height <= 0) throw Error(path + ": cannot write an empty class raster");
@@ -79,7 +92,8 @@ ClassGeoTiffWriter::ClassGeoTiffWriter(const std::string& path, const Grid& grid
   dataset_ = ds;
   double transform[6] = {grid.west(), grid.cell_m, 0, grid.north(), 0, -grid.cell_m};
   GDALSetGeoTransform(ds, transform);
-  if (epsg > 0) {
+  if (epsg != 0) {
+    check_epsg(epsg, path);
     OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
     if (OSRImportFromEPSG(srs, epsg) == OGRERR_NONE) {
       char* wkt = nullptr;

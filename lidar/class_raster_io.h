@@ -17,7 +17,11 @@ Rgb8 class_colour(BuiltUpClass c);  // none light grey, hamlet red, village gree
 
 // One pixel per cell (north up) and a legend strip below naming each class with its colour.
 void write_class_png(const std::string& path, const Image<std::uint8_t>& classes);
-// Single-band Byte GeoTIFF of the class codes (0 none .. 4 city) with a colour table; epsg <= 0 leaves the CRS unset.
+// hf::Error unless epsg is 0 (no CRS) or a code GDAL's EPSG tables know ("--epsg -5" was ignored, an unknown code
+// silently left the GeoTIFF without a CRS); `what` names where the code came from in the message.
+void check_epsg(int epsg, const std::string& what);
+// Single-band Byte GeoTIFF of the class codes (0 none .. 4 city) with a colour table; epsg 0 leaves the CRS unset,
+// an unknown code is an hf::Error (check_epsg).
 void write_class_geotiff(const std::string& path, const Image<std::uint8_t>& classes, const Grid& grid, int epsg);
 // White on black; with `truth`, cells are coloured TP white, FP red, FN blue.
 void write_mask_png(const std::string& path, const Mask& mask, const Mask* truth = nullptr);

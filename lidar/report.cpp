@@ -33,6 +33,7 @@ nlohmann::json report_json(const Report& r) {
                      {"ground_margin_m", o.heights.ground_margin_m},
                      {"epsg", r.epsg},
                      {"tiles", r.tiles.empty() ? "1 x 1" : r.tiles}};
+  if (!r.outputs.empty()) j["outputs"] = r.outputs;
   const Grid& g = r.raster->grid;
   j["grid"] = {{"west", g.west()}, {"north", g.north()}, {"width", g.width}, {"height", g.height}, {"cell_m", g.cell_m}};
   for (int k = 0; k < kBuiltUpClasses; ++k) {

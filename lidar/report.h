@@ -5,6 +5,7 @@
 //   building_mask {completeness, correctness, f1, tp, fp, fn}        when footprints are given
 //   validation {hamlet|...: {completeness, correctness, f1} | null, mean_f1}   when a class truth is known
 //   sensitivity [{t_s, classes {NAME: cells}, mean_f1?}]              when a sweep of t^S ran
+//   outputs [file names]                                              what the run wrote into its folder
 #pragma once
 
 #include <optional>
@@ -33,6 +34,7 @@ struct Report {
   std::optional<Scores> building_mask;
   std::optional<ClassValidation> validation;
   std::vector<SweepRow> sweep;
+  std::vector<std::string> outputs;  // the files the run wrote into its folder (report.json "outputs")
 };
 
 nlohmann::json report_json(const Report& r);

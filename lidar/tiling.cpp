@@ -133,7 +133,10 @@ TileResult run_tile(const std::vector<std::string>& files, const TilePlan& plan,
                     const TileLimits& limits, bool progress) {
   if (tile < 0 || tile >= plan.count()) throw Error("tile " + std::to_string(tile) + " is not in the plan's 0.." + std::to_string(plan.count() - 1));
   const CellRect win = plan.window(tile);
-  const CellRaster raster = rasterise_files(files, plan.grid.window(win.col, win.row, win.width, win.height), options.classes, progress);
+  // Points beyond the window belong to other tiles; points beyond the plan's whole grid prove a header's box
+  // wrong, and would be lost by every tile without a word (the single run refuses such a file the same way).
+  const CellRaster raster = rasterise_files(files, plan.grid.window(win.col, win.row, win.width, win.height),
+                                            options.classes, progress, OutsideGrid::refuse, &plan.grid);
   return run_tile_on(raster, plan, tile, options, limits);
 }
 

@@ -113,6 +113,55 @@ lock)  # 35.7: a second run into a folder in use exits 1 naming the holder's pid
   "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 3 --out out > log2 2>&1 ||
     fail "the lock was not released: $(cat log2)"
   ;;
+lidar_epsg)  # 35.8: `lidar --epsg -5` was ignored, and an unknown code left the GeoTIFF without a CRS, silently
+  for code in -5 999999; do
+    timeout 60 "$HF" lidar --input synthetic:3 --cell-m 2 --epsg $code --out o$code > log 2>&1
+    rc=$?
+    [ $rc = 1 ] || fail "--epsg $code: exit $rc: $(tail -2 log)"
+    grep -q -- "--epsg: EPSG:$code is not a coordinate reference system GDAL knows" log || fail "$(cat log)"
+    [ "$(wc -l < log)" = 1 ] || fail "expected one line: $(cat log)"
+    [ ! -e o$code ] || fail "--epsg $code: the refused run left an output folder"
+  done
+  ;;
+lidar_transaction)  # 35 (build): `lidar`'s outputs as one transaction, like `run`'s
+  mkdir o && echo "my notes" > o/notes.txt
+  "$HF" lidar --input synthetic:3 --cell-m 2 --out o > log 2>&1 || fail "first run: $(cat log)"
+  for f in classes.png classes.tif buildings.png report.json report.md synthetic.las notes.txt; do
+    [ -f o/$f ] || fail "o/$f missing after the first run"
+  done
+  grep -q '"outputs"' o/report.json || fail "report.json lists no outputs"
+  grep -q "\"o/synthetic.las\"" o/report.json || fail "report.json names the private folder: $(grep -A2 inputs o/report.json)"
+  cp o/report.json first.json
+  # A run that fails after the transaction began (its footprints are not a vector file) leaves o as it was.
+  echo "not a vector file" > bad.gpkg
+  "$HF" lidar --input synthetic:3 --cell-m 2 --footprints bad.gpkg --out o > log 2>&1 && fail "bad footprints: exit 0"
+  cmp -s o/report.json first.json || fail "a failed run changed o/report.json"
+  [ -f o/classes.png ] || fail "a failed run removed o/classes.png"
+  # A second run replaces the run's files, keeps the user's, and leaves no private folder or temporary behind.
+  "$HF" lidar --input synthetic:3 --cell-m 3 --out o > log 2>&1 || fail "second run: $(cat log)"
+  [ "$(cat o/notes.txt)" = "my notes" ] || fail "the user's notes.txt was lost"
+  cmp -s o/report.json first.json && fail "the second run did not replace report.json"
+  [ -z "$(ls -A . | grep '^\.o\.run-')" ] || fail "private folders left: $(ls -A .)"
+  [ -z "$(find o -name '*.tmp*')" ] || fail "temporaries left: $(find o -name '*.tmp*')"
+  ;;
+bench_transaction)  # 35 (build): `bench`'s outputs as one transaction, like `run`'s
+  mkdir o && echo "my notes" > o/notes.txt
+  "$HF" bench --input synthetic:wall --synthetic-frames 3 --registration icp --peers none --out o > log 2>&1 ||
+    fail "first bench: $(cat log)"
+  for f in results.md results.json results.csv speed_vs_error.png notes.txt; do
+    [ -f o/$f ] || fail "o/$f missing after the first bench"
+  done
+  grep -q "$ROOT/o/results.md" log || fail "the outputs listed are not where they ended up: $(cat log)"
+  cp o/results.json first.json
+  # A bench that fails after the transaction began (its input does not exist) leaves o as it was.
+  "$HF" bench --input no_such_folder --registration icp --peers none --out o > log 2>&1 && fail "missing input: exit 0"
+  cmp -s o/results.json first.json || fail "a failed bench changed o/results.json"
+  # --merge into the same folder replaces the run's files and keeps the user's.
+  "$HF" bench --merge o --out o > log 2>&1 || fail "merge into o: $(cat log)"
+  [ "$(cat o/notes.txt)" = "my notes" ] || fail "the user's notes.txt was lost"
+  [ -f o/results.md ] || fail "merge wrote no results.md"
+  [ -z "$(ls -A . | grep '^\.o\.run-')" ] || fail "private folders left: $(ls -A .)"
+  ;;
 *)
   fail "unknown case"
   ;;

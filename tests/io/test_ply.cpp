@@ -408,13 +408,16 @@ std::vector<PlyBadCase> bad_cases() {
       {"ascii list longer than line", ascii3 + kFace + "end_header\n0 0 0\n1 1 1\n2 2 2\n200 0 1 2\n",
        "bad.ply:13: face 0: unexpected end of line in a list of 200 vertex indices"},
       {"ascii absurd count", "ply\nformat ascii 1.0\nelement vertex 1099511627776\n" + kXyz + "end_header\n0 0 0\n",
-       "bad.ply:3: expected at most 1 'vertex' elements in the 6 bytes left in the file, got a count of 1099511627776"},
+       "bad.ply:3: expected 1099511627776 'vertex' elements of at least 6 bytes each, got 6 bytes left in the file, "
+       "room for 1 (truncated file?)"},
+      {"ascii header only", "ply\nformat ascii 1.0\nelement vertex 1\n" + kXyz + "end_header\n",
+       "bad.ply:3: expected 1 'vertex' element after 'end_header', got the end of the file (truncated file?)"},
       {"binary truncated", bin_list2 + "end_header\n" + le_body({0, 0, 0}) + "\x05" + le_body({1, 2, 3, 4, 5}),
        "bad.ply: vertex 1: unexpected end of file"},
       {"binary truncated face", bin3 + kFace + "end_header\n" + le_body({0, 0, 0, 1, 1, 1, 2, 2, 2}) + "\x03" + std::string(8, '\0'),
        "bad.ply: face 0: unexpected end of file in a list of 3 vertex indices"},
       {"binary absurd count", "ply\nformat binary_little_endian 1.0\nelement vertex 1099511627776\n" + kXyz + "end_header\n" + le_body({0, 0, 0}),
-       "bad.ply:3: expected at most 1 'vertex' elements in the 12 bytes left in the file"},
+       "bad.ply:3: expected 1099511627776 'vertex' elements of at least 12 bytes each, got 12 bytes left in the file"},
       {"binary nan", bin3 + "end_header\n" + le_body({0, 0, 0, 1, std::nanf(""), 1, 2, 2, 2}),
        "bad.ply: vertex 1: expected finite float coordinates"},
       {"binary index out of range", bin3 + kFace + "end_header\n" + le_body({0, 0, 0, 1, 1, 1, 2, 2, 2}) + "\x03" +
@@ -443,6 +446,28 @@ TEST(PlyRead, MalformedInputGivesOneClearParseError) {
       EXPECT_NE(std::string(e.what()).find(c.expected), std::string::npos)
           << "  message: " << e.what() << "\n  expected to contain: " << c.expected;
     }
+  }
+}
+
+// 100,000 properties in one element: the duplicate-name check was a scan of the properties so far (11.6 s of
+// comparisons before the body's size was even checked); now a set. The error is the body's, named at its element.
+TEST(PlyRead, HeaderOfAHundredThousandPropertiesIsReadInOnePass) {
+  std::string header = "ply\nformat ascii 1.0\nelement vertex 1\n";
+  for (int i = 0; i < 100000; ++i) header += "property float p" + std::to_string(i) + "\n";
+  header += "end_header\n";
+  try {
+    parse_ply_mesh(header, "wide.ply");
+    FAIL() << "expected hf::ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "wide.ply:3: expected 1 'vertex' element after 'end_header', got the end of the file (truncated file?)");
+  }
+  try {
+    parse_ply_mesh(header.substr(0, header.size() - 11) + "property float p99999\nend_header\n", "wide.ply");
+    FAIL() << "expected hf::ParseError";
+  } catch (const ParseError& e) {
+    EXPECT_NE(std::string(e.what()).find("wide.ply:100004: expected one property 'p99999' in element 'vertex'"),
+              std::string::npos) << e.what();
   }
 }
 
@@ -476,7 +501,7 @@ TEST(PlyRead, EveryTruncationOfABinaryFileFailsCleanly) {
       const std::string msg = e.what();
       if (n >= header_end) {
         // Either the counts no longer fit the bytes left (caught before reading) or a face list runs out.
-        EXPECT_TRUE(msg.find("expected at most") != std::string::npos ||
+        EXPECT_TRUE(msg.find("(truncated file?)") != std::string::npos ||
                     msg.find("unexpected end of file") != std::string::npos)
             << msg;
       }

@@ -328,6 +328,23 @@ TEST(TumDataset, ListsThatAreNotRegularFilesAreRefusedAtOnce) {
   EXPECT_TRUE(contains(e, "rgb.txt: cannot read image list: it is a FIFO")) << e;
 }
 
+// Issue 35.8: a symbolic link loop (or a link to nothing) named groundtruth.txt was read as "no ground truth" and
+// the run went on without ATE; a folder there was already an error. Both now name the file.
+TEST(TumDataset, GroundTruthLinkThatDoesNotResolveIsRefused) {
+  TumFolder loop;
+  const auto gt = loop.dir / "groundtruth.txt";
+  std::filesystem::remove(gt);
+  std::filesystem::create_symlink("groundtruth.txt", gt);  // itself: ELOOP
+  const std::string e = error_of([&] { hf::TumDataset d(loop.dir.str()); });
+  EXPECT_TRUE(contains(e, "groundtruth.txt: cannot read the ground truth (")) << e;
+  TumFolder dangling;
+  const auto gt2 = dangling.dir / "groundtruth.txt";
+  std::filesystem::remove(gt2);
+  std::filesystem::create_symlink("no_such_file.txt", gt2);
+  const std::string e2 = error_of([&] { hf::TumDataset d(dangling.dir.str()); });
+  EXPECT_TRUE(contains(e2, "groundtruth.txt: cannot read the ground truth (a link to nothing)")) << e2;
+}
+
 TEST(TumList, LongLinesAndTheirContentAreBounded) {
   // Built by append: gcc 12 warns falsely (-Warray-bounds) on "..." + std::string(n, c) + "..." once inlined here.
   std::string long_line = "1 a\n";

@@ -13,6 +13,7 @@
 #include "lidar/built_up_areas.h"
 #include "lidar/connected_components.h"
 #include "lidar/synthetic_settlements.h"
+#include "lidar/tiling.h"
 #include "lidar/validation.h"
 
 namespace hf::lidar {
@@ -163,7 +164,18 @@ TEST(Settlements, HeaderBoxThatLeavesPointsOutIsRefused) {
     message = e.what();
   }
   const CellRaster skipped = rasterise_files({path}, grid, {});  // a tile's window: outside points are not an error
+  // A tiled run's task (`lidar --tiles 1,1 --tile 0`) skips the points beyond its window but refuses the file the
+  // same way for points beyond the whole grid: they dropped without a word before.
+  BuiltUpOptions tiled;
+  tiled.cell_m = 1.0;
+  std::string tile_message;
+  try {
+    run_tile({path}, plan_tiles(grid, 1, 1, tiled), 0, tiled, {}, false);
+  } catch (const Error& e) {
+    tile_message = e.what();
+  }
   std::filesystem::remove_all(dir);
+  EXPECT_EQ(tile_message, message);
   EXPECT_EQ(message.rfind(path + ": " + std::to_string(skipped.outside) + " of " + std::to_string(scene.points.size()) +
                               " points lie outside the header's bounding box (x ",
                           0),

@@ -133,3 +133,25 @@ file(GLOB_RECURSE leftovers ${WORK}/out/.* ${WORK}/transfer/.* ${WORK}/events/.*
 if(leftovers)
   message(FATAL_ERROR "temporary files left: ${leftovers}")
 endif()
+
+# The outputs as one transaction (issue 35): a user's file in --out survives a rerun, a run that fails after the
+# transaction began (a sketch naming an unknown shot) leaves --out byte for byte as it was, and no private folder
+# (".out.run-*") or lock-held temporary is left beside it.
+file(WRITE ${WORK}/out/notes.txt "my notes\n")
+file(READ ${WORK}/out/polygons.json before)
+execute_process(COMMAND ${HASHFUSION} model --shots ${DATA} --polygons ${WORK}/bad.json --out ${WORK}/out
+                RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_QUIET)
+file(READ ${WORK}/out/polygons.json after)
+if(NOT rc EQUAL 1 OR NOT before STREQUAL after OR NOT EXISTS ${WORK}/out/model.obj)
+  message(FATAL_ERROR "a failed model run changed --out (exit ${rc}): ${err}")
+endif()
+execute_process(COMMAND ${HASHFUSION} model --shots ${DATA} --polygons ${WORK}/sketch.json --out ${WORK}/out
+                RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
+file(READ ${WORK}/out/notes.txt notes)
+if(NOT rc EQUAL 0 OR NOT notes STREQUAL "my notes\n" OR NOT EXISTS ${WORK}/out/polygons.json)
+  message(FATAL_ERROR "rerun into a folder with a user's file: exit ${rc}, notes '${notes}': ${err}")
+endif()
+file(GLOB private LIST_DIRECTORIES true ${WORK}/.out.run-*)
+if(private)
+  message(FATAL_ERROR "private folders left: ${private}")
+endif()
