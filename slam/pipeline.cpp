@@ -548,11 +548,26 @@ void Pipeline::apply_loop_result(const LoopJobResult& res, FrameResult* r) {
   fused_.schedule(keyframes_, camera_, config_.volume.voxel_m);
   // The most-displaced frames are the ones just before the loop, whose surfaces the camera sees now: until they
   // are re-fused, the next frames track against them at their old poses and snap back by the correction.
-  // Realtime mode has only its per-frame budget.
+  // Realtime mode has only its per-frame budget. Offline, frames_after_loop re-fusions are owed from this frame
+  // on, at most frames_after_loop_per_step a frame (Pipeline::reintegrate), so the loop frame does not stall; a
+  // later loop adds its own to what is still owed (bounded: the queue it re-fuses from holds the stored frames).
   if (realtime_) return;
+  loop_refusions_owed_ += size_t(config_.reintegration.frames_after_loop);
+  pay_loop_refusions(r);
+}
+
+// Up to frames_after_loop_per_step of the re-fusions a loop left owed (offline), most-displaced first.
+void Pipeline::pay_loop_refusions(FrameResult* r) {
+  if (loop_refusions_owed_ == 0) return;
+  if (fused_.pending() == 0) {
+    loop_refusions_owed_ = 0;
+    return;
+  }
+  loop_refusions_paid_at_ = frames_;
   const auto t0 = std::chrono::steady_clock::now();
-  const size_t done = fused_.step(size_t(config_.reintegration.frames_after_loop), keyframes_, grid_, camera_,
-                                  config_.integrate, &store_);
+  const size_t n = std::min(loop_refusions_owed_, size_t(config_.reintegration.frames_after_loop_per_step));
+  const size_t done = fused_.step(n, keyframes_, grid_, camera_, config_.integrate, &store_);
+  loop_refusions_owed_ = fused_.pending() == 0 ? 0 : loop_refusions_owed_ - n;
   r->reintegrated += done;
   r->ms.reintegrate += ms_since(t0);
   if (done > 0) device_map_stale_ = true;
@@ -572,6 +587,8 @@ bool Pipeline::apply_graph(const PoseGraphOptions& options) {
 // The re-fusion budget between two frames: frames_per_step re-fusions offline, budget_ms_per_frame realtime.
 void Pipeline::reintegrate(FrameResult* r) {
   if (!config_.reintegration.enabled || fused_.pending() == 0) return;
+  if (!realtime_ && loop_refusions_paid_at_ != frames_) pay_loop_refusions(r);  // once per frame
+  if (fused_.pending() == 0) return;
   const auto t0 = std::chrono::steady_clock::now();
   size_t done = 0;
   if (realtime_) {

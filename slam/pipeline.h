@@ -236,6 +236,7 @@ class Pipeline {
   void apply_loop_result(const LoopJobResult& result, FrameResult* r);
   bool apply_graph(const PoseGraphOptions& options);
   void reintegrate(FrameResult* r);
+  void pay_loop_refusions(FrameResult* r);
   void record_anchor(const FrameResult& r);
   void check_colour(const FramePyramid& current, FrameResult* r);
   void lose(FrameResult* r, std::string why);
@@ -286,6 +287,8 @@ class Pipeline {
   std::map<size_t, std::vector<AppearanceMatch>> loop_matches_;  // per keyframe not yet handed to a job
   size_t keyframes_handed_ = 0;  // keyframes [0, this) were given to a job
   size_t corrections_ = 0;       // loop results applied that moved keyframes
+  size_t loop_refusions_owed_ = 0;  // offline: re-fusions still owed to the last loop (frames_after_loop)
+  size_t loop_refusions_paid_at_ = 0;  // frames_ when a share was last paid (one share per frame)
   bool realtime_ = false;
   // Per processed frame: the keyframe it moves with (npos before the first) and its pose relative to it.
   struct Anchor {

@@ -173,6 +173,7 @@ void visit(V&& v, ReintegrationOptions& o) {
   v("min_rotation_deg", o.min_rotation_deg);
   v("frames_per_step", o.frames_per_step);
   v("frames_after_loop", o.frames_after_loop);
+  v("frames_after_loop_per_step", o.frames_after_loop_per_step);
   v("budget_ms_per_frame", o.budget_ms_per_frame);
   v("min_displacement_vox", o.min_displacement_vox);
   v("memory_budget_mb", o.memory_budget_mb);

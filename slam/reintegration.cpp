@@ -23,6 +23,8 @@ void ReintegrationOptions::validate() const {
   if (frames_per_step < 0 || frames_per_step > 1000) throw Error("reintegration.frames_per_step must be in [0, 1000]");
   if (frames_after_loop < 0 || frames_after_loop > 100000)
     throw Error("reintegration.frames_after_loop must be in [0, 100000]");
+  if (frames_after_loop_per_step < 1 || frames_after_loop_per_step > 100000)
+    throw Error("reintegration.frames_after_loop_per_step must be in [1, 100000]");
   if (!(memory_budget_mb >= 0) || !std::isfinite(memory_budget_mb))
     throw Error("reintegration.memory_budget_mb must be >= 0");
 }

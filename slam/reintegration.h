@@ -49,11 +49,15 @@ struct ReintegrationOptions {
   // Realtime mode (Pipeline::set_realtime): re-fusions continue between two frames while less than this has been
   // spent on them (so one re-fusion can overrun it by its own length, ~10 ms); frames_per_step is then unused.
   double budget_ms_per_frame = 10.0;
-  // Re-fusions right after a loop closure moved the keyframes, before the next frame is tracked. The most-changed
+  // Re-fusions owed after a loop closure moved the keyframes (offline), on top of frames_per_step. The most-changed
   // frames are the ones just before the loop, whose surfaces the camera sees now: until they are re-fused, the
   // next frames track against them at their old poses and snap back by the correction. 16 on the synthetic lap
-  // (640x480): ATE 2.54 -> 1.9 mm, the loop frame ~130 ms longer (bench/results/tracking.md).
+  // (640x480): ATE 2.54 -> 1.9 mm (bench/results/tracking.md). They are paid at most frames_after_loop_per_step
+  // per frame, starting on the frame that applies the loop. All at once (16, the default) costs the loop frame
+  // ~160 ms at 640x480, the session's worst frame; spread, the lap's ATE grows (1.40 mm at 16, 1.46 at 8, 1.50 at
+  // 4; bench/results/backend.md), so the default keeps the accuracy and the spreading is the latency user's choice.
   int frames_after_loop = 16;
+  int frames_after_loop_per_step = 16;
   double memory_budget_mb = 2048.0;  // compressed images of every fused frame (keyframes.jpeg_quality for colour)
 
   void validate() const;  // hf::Error naming the bad field
