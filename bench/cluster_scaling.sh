@@ -9,7 +9,7 @@
 #    survey (6 x 6 copies of the synthetic settlements, scripts/lidar_replicate_las.py) where the work outweighs
 #    the scheduler's dispatch. Per configuration: submission to the merge's end (wall), each task's and the merge's
 #    own wall time and peak RSS. A single run without Slurm for reference.
-# 2. A bench sweep (synthetic:room and TUM fr1/rpy 0-149, icp / combined / gicp, 100 and 150 frames): each run's
+# 2. A bench sweep (synthetic:room and TUM fr1/rpy 0-149, icp / combined, 100 and 150 frames): each run's
 #    peak RSS and wall time, and the merge's.
 set -euo pipefail
 build=$(cd "$1" && pwd)
@@ -28,7 +28,7 @@ source "$state/env"
 # The wrapper every job runs instead of hashfusion: one line per process in $HF_TIME_LOG.
 cat > "$work/hf-timed" <<EOF
 #!/bin/bash
-exec /usr/bin/time -f "%e s %M KiB: \$*" -a -o "\$HF_TIME_LOG" "$hf" "\$@"
+exec /usr/bin/time -f "%e s wall, %U+%S s CPU, %M KiB: \$*" -a -o "\$HF_TIME_LOG" "$hf" "\$@"
 EOF
 chmod +x "$work/hf-timed"
 
@@ -41,7 +41,7 @@ echo "# $(date -u +%FT%TZ), commit $(git -C "$src" rev-parse --short HEAD), $(np
 
 lidar_case() {  # lidar_case NAME INPUT ARGS
   local name=$1 input=$2 args=$3 tiles n out t0 t1 ids a m
-  /usr/bin/time -f "%e s %M KiB: single run" -o "$work/$name-single.time" \
+  /usr/bin/time -f "%e s wall, %U+%S s CPU, %M KiB: single run" -o "$work/$name-single.time" \
     "$hf" lidar --input "$input" --out "$work/$name-single" $args > /dev/null
   echo "$name single run (no Slurm): $(cat "$work/$name-single.time")"
   for tiles in 1,1 2,1 3,2; do
@@ -72,13 +72,13 @@ lidar_case survey "$work/survey.las" "--cell-m 1 --areas 1500,10000,35000 --t 2 
 
 # The bench sweep: per run memory and time.
 export HF_TIME_LOG=$work/sweep.time
-args="--registration icp,combined,gicp --peers none --synthetic-frames 100"
+args="--registration icp,combined --peers none --synthetic-frames 100"
 t0=$(date +%s.%N)
 ids=$(HASHFUSION=$work/hf-timed HF_INPUTS="synthetic:room $shared/tum_fr1_rpy_first150" HF_OUT="$work/sweep" \
       HF_ARGS="$args" HF_CPUS=1 bash "$src/scripts/bench_sweep.slurm" submit)
 read -r a m < <(sed -n 's/^array job \([0-9]*\) .*merge job \([0-9]*\) after it.*/\1 \2/p' <<< "$ids")
 wait_for_job "$m"
 t1=$(date +%s.%N)
-echo "bench sweep (2 inputs x 3 methods, 6 tasks): merge $(job_field "$m" JobState); submission to the waiter's return $(awk "BEGIN { printf \"%.1f\", $t1 - $t0 }") s"
+echo "bench sweep (2 inputs x 2 methods, 4 tasks): merge $(job_field "$m" JobState); submission to the waiter's return $(awk "BEGIN { printf \"%.1f\", $t1 - $t0 }") s"
 sed 's/^/  /' "$HF_TIME_LOG"
 echo "# load at the end: $(cut -d' ' -f1-3 /proc/loadavg)"

@@ -52,6 +52,7 @@ cluster_fail() {  # one line, then the logs, then exit 1 (CI) or 77 (skip) as de
   exit 1
 }
 
+cluster_stop  # a stale STATE from an interrupted run: stop what it started (before any skip, so no test uses it)
 missing=()
 for exe in munged mungekey slurmctld slurmd sbatch sinfo scontrol; do
   command -v "$exe" >/dev/null || [[ -x /usr/sbin/$exe ]] || missing+=("$exe")
@@ -66,7 +67,6 @@ if ((${#missing[@]})); then
 fi
 PATH=$PATH:/usr/sbin
 
-cluster_stop  # a stale STATE from an interrupted run: stop what it started
 mkdir -p "$state"
 root=$(mktemp -d "${TMPDIR:-/tmp}/hf-slurm.XXXXXX") || cluster_fail "cannot create a temporary folder"
 echo "$root" > "$state/root"
