@@ -119,6 +119,8 @@ JobAcctGatherType=jobacct_gather/none
 AccountingStorageType=accounting_storage/none
 SelectType=select/cons_tres
 SelectTypeParameters=CR_Core_Memory
+# Memory is scheduled: a job without --mem gets this per CPU instead of the whole node.
+DefMemPerCPU=512
 ReturnToService=2
 MpiDefault=none
 SchedulerType=sched/backfill
