@@ -8,6 +8,7 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
@@ -37,6 +38,8 @@ struct BenchCliOptions {
   int peer_pixel_stride = 2;
   std::string config_file;
   int tracking_level = -1;
+  std::string shard;      // --shard K/N: slice K of N of the runs (bench/harness/harness.h)
+  bool list_runs = false;  // --list-runs: print the runs, one per line, and run nothing
   std::string command_line;
 };
 
@@ -110,6 +113,13 @@ void run_bench_command(const BenchCliOptions& c) {
   o.peer.pixel_stride = c.peer_pixel_stride;
   o.command_line = c.command_line;
   o.source_dir = bench::build_source_dir();
+  if (!c.shard.empty()) std::tie(o.shard_index, o.shard_count) = bench::parse_shard(c.shard);
+  if (c.list_runs) {
+    // One line per run, "INDEX<TAB>INPUT<TAB>METHOD": what --shard K/N slices, and the array size of one run per task.
+    const std::vector<bench::PlannedRun> runs = bench::plan_runs(o);
+    for (size_t k = 0; k < runs.size(); ++k) std::cout << k << "\t" << runs[k].input << "\t" << runs[k].method << "\n";
+    return;
+  }
   InterruptGuard guard;  // Ctrl-C / SIGTERM: finish the current run, write the results, exit 130 / 143
   o.stop = guard.flag();
   const bench::BenchReport report = bench::run_bench(o);
@@ -152,6 +162,11 @@ void add_bench_command(CLI::App& app) {
                   "loop-closure modes each registration runs in: all, or a list of off, on, global (run --global)")
       ->capture_default_str();
   cmd->add_option("--out", opts->out, "output folder")->capture_default_str();
+  cmd->add_option("--shard", opts->shard,
+                  "K/N: run only slice K (from 0) of N of the runs --list-runs lists (a job array task; "
+                  "`bench --merge` of the N --out folders in K order gives the single run's tables)");
+  cmd->add_flag("--list-runs", opts->list_runs,
+                "print the runs (INDEX, INPUT, METHOD per line, tab-separated) that --shard slices, and run nothing");
   cmd->add_option("--voxel-m", opts->voxel_m, "TSDF voxel size in metres")->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--backend", opts->backend, "reduction backend: cpu | opencl")->capture_default_str();
@@ -178,6 +193,8 @@ void add_bench_command(CLI::App& app) {
     if (opts->inputs.empty() && opts->merge.empty()) throw Error("bench: --input is required (or --merge DIR... to combine earlier results)");
     if (!opts->merge.empty()) {
       if (!opts->inputs.empty()) throw Error("bench: --merge runs nothing: give --input or --merge, not both");
+      if (!opts->shard.empty() || opts->list_runs)
+        throw Error("bench: --shard and --list-runs slice the runs of --input, not a --merge");
       std::string line = "hashfusion bench --merge";
       for (const std::string& d : opts->merge) line += " " + quote_arg(d);
       opts->command_line = line + " --out " + quote_arg(opts->out);
@@ -192,6 +209,7 @@ void add_bench_command(CLI::App& app) {
             quote_arg(opts->backend) + " --max-frames " + std::to_string(opts->max_frames) +
             " --synthetic-frames " + std::to_string(opts->synthetic_frames);
     if (!opts->config_file.empty()) line += " --config " + quote_arg(opts->config_file);
+    if (!opts->shard.empty()) line += " --shard " + quote_arg(opts->shard);
     if (opts->tracking_level >= 0) line += " --tracking-level " + std::to_string(opts->tracking_level);
     opts->command_line = line;
     run_bench_command(*opts);

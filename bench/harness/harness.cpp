@@ -254,6 +254,7 @@ BenchReport run_bench(const BenchOptions& o) {
   if (o.registrations.empty() && o.peers.empty()) throw Error("bench: nothing to run (no registration, no peer)");
   if (o.synthetic_frames < 2) throw Error("bench: --synthetic-frames must be at least 2");
   if (!(o.voxel_m > 0.0)) throw Error("bench: --voxel-m must be positive");
+  if (o.loop_closure_modes.empty()) throw Error("bench: no loop-closure mode");
   o.peer.validate();
   {
     // Fail fast on settings every run would reject.
@@ -264,6 +265,20 @@ BenchReport run_bench(const BenchOptions& o) {
     check.validate();
   }
   const DiscoveredInputs discovered = discover_inputs(o.inputs);
+  // The slice of the runs this process makes (--shard K/N; everything by default): run number `unit` counts the
+  // (input, method) pairs in plan_runs() order, and a slice keeps only its inputs and methods in the tables.
+  const size_t methods_per_input = o.registrations.size() * o.loop_closure_modes.size() + o.peers.size();
+  const size_t total_runs = discovered.inputs.size() * methods_per_input;
+  if (o.shard_count < 1 || o.shard_index < 0 || o.shard_index >= o.shard_count)
+    throw Error("bench: --shard " + std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count) +
+                ": expected K/N with 0 <= K < N");
+  if (size_t(o.shard_count) > total_runs)
+    throw Error("bench: --shard " + std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count) + ": only " +
+                std::to_string(total_runs) + (total_runs == 1 ? " run" : " runs") +
+                " to share (bench --list-runs lists them): use at most that many slices");
+  const std::pair<size_t, size_t> slice = shard_range(total_runs, o.shard_index, o.shard_count);
+  const size_t first_run = slice.first, last_run = slice.second;
+  auto in_slice = [&](size_t unit) { return unit >= first_run && unit < last_run; };
   std::error_code ec;
   fs::create_directories(o.out, ec);
   if (ec || !fs::is_directory(o.out)) throw Error(o.out + ": cannot create the output folder");
@@ -276,10 +291,18 @@ BenchReport run_bench(const BenchOptions& o) {
   results.machine = current_machine(o.source_dir, o.command_line);
   results.settings = settings_line(o);
   results.notes = discovered.notes;
-  if (o.loop_closure_modes.empty()) throw Error("bench: no loop-closure mode");
+  std::vector<std::string> all_methods;  // the table labels of one input's runs, in run order
   for (const std::string& m : o.registrations)
-    for (const std::string& mode : o.loop_closure_modes) results.methods.push_back(loop_closure_label(m, mode));
-  for (const std::string& p : o.peers) results.methods.push_back(p + " (peer)");
+    for (const std::string& mode : o.loop_closure_modes) all_methods.push_back(loop_closure_label(m, mode));
+  for (const std::string& p : o.peers) all_methods.push_back(p + " (peer)");
+  for (size_t j = 0; j < all_methods.size(); ++j) {
+    bool any = false;
+    for (size_t i = 0; i < discovered.inputs.size() && !any; ++i) any = in_slice(i * methods_per_input + j);
+    if (any) results.methods.push_back(all_methods[j]);
+  }
+  if (o.shard_count > 1)
+    std::cerr << "shard " << o.shard_index << "/" << o.shard_count << ": runs " << first_run << ".." << last_run - 1
+              << " of " << total_runs << "\n";
   for (const std::string& note : discovered.notes) std::cerr << "note: " << note << "\n";
 
   std::vector<std::string> trajectory_files;
@@ -287,6 +310,8 @@ BenchReport run_bench(const BenchOptions& o) {
   for (size_t i = 0; i < n_inputs; ++i) {
     if (o.stop && o.stop->load()) break;
     const BenchInput& input = discovered.inputs[i];
+    const size_t input_first = i * methods_per_input;
+    if (last_run <= input_first || first_run >= input_first + methods_per_input) continue;  // not in this slice
     results.inputs.push_back(input.label);
     std::cerr << "input " << (i + 1) << "/" << n_inputs << ": " << input.label << "\n";
     std::string folder = input.spec;
@@ -295,7 +320,9 @@ BenchReport run_bench(const BenchOptions& o) {
         folder = render_synthetic(input, cache_root, o);
       } catch (const std::exception& e) {
         // Every run on this input fails the same way; record it rather than abort the whole benchmark.
-        for (const std::string& m : results.methods) {
+        for (size_t j = 0; j < methods_per_input; ++j) {
+          if (!in_slice(input_first + j)) continue;
+          const std::string& m = all_methods[j];
           RunRow row;
           const bool peer = m.size() > 7 && m.compare(m.size() - 7, 7, " (peer)") == 0;
           row.method = peer ? m.substr(0, m.size() - 7) : m;
@@ -324,8 +351,10 @@ BenchReport run_bench(const BenchOptions& o) {
       }
       results.runs.push_back(std::move(row));
     };
+    size_t unit = input_first;
     for (const std::string& method : o.registrations) {
       for (const std::string& mode : o.loop_closure_modes) {
+        if (!in_slice(unit++)) continue;
         if (o.stop && o.stop->load()) break;
         Trajectory estimate;
         RunRow row = run_method(input, folder, method, mode, o, estimate);
@@ -333,6 +362,7 @@ BenchReport run_bench(const BenchOptions& o) {
       }
     }
     for (const std::string& peer : o.peers) {
+      if (!in_slice(unit++)) continue;
       if (o.stop && o.stop->load()) break;
       Trajectory estimate;
       RunRow row = run_peer_row(input, folder, peer, o, estimate);

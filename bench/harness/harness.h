@@ -18,6 +18,7 @@
 
 #include <atomic>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bench/harness/peers.h"
@@ -47,7 +48,28 @@ struct BenchOptions {
   std::string source_dir;                  // where `git rev-parse HEAD` runs; empty: commit "unknown"
   const std::atomic<bool>* stop = nullptr;
   bool progress = true;                    // progress bars on stderr (slam::RunControl::progress_label)
+  // --shard K/N (a job array, scripts/bench_sweep.slurm): run only slice K of N of the runs plan_runs() lists,
+  // the runs [K*U/N, (K+1)*U/N) of U. The results list only the inputs and methods this slice ran, in the single
+  // run's order, so `bench --merge` of slices 0..N-1 (in that order) gives the single run's methods, inputs, rows
+  // and tables. The default 0/1 is everything.
+  int shard_index = 0, shard_count = 1;
 };
+
+// One run of a benchmark: a method (its table label: loop_closure_label or "NAME (peer)") on an input.
+struct PlannedRun {
+  std::string input;   // BenchInput::label
+  std::string method;  // the table label
+};
+// The runs of `options` in the order run_bench makes them: per input (discover_inputs order), each registration
+// in each loop-closure mode, then each peer. Discovers the inputs (throws as discover_inputs) but renders and runs
+// nothing. `bench --list-runs` prints this list; its length is the N of one run per array task.
+std::vector<PlannedRun> plan_runs(const BenchOptions& options);
+
+// "K/N" with 0 <= K < N -> {K, N}. Throws hf::Error naming the text otherwise.
+std::pair<int, int> parse_shard(const std::string& text);
+// The half-open index range [first, last) of slice k of n over `runs` runs: [k*runs/n, (k+1)*runs/n). Slices are
+// contiguous (a slice renders each synthetic input it touches once) and differ in size by at most one.
+std::pair<size_t, size_t> shard_range(size_t runs, int k, int n);
 
 // "all" -> registration_names(); else a comma-separated list of registry names (and "groundtruth"). Throws
 // hf::Error naming an unknown method and listing the known ones, or for an empty list.
@@ -71,8 +93,9 @@ struct BenchReport {
   std::vector<std::string> files;  // every file written, results first
 };
 
-// Runs everything and writes the outputs. Throws hf::Error for bad options, inputs that cannot be found, or an
-// output folder that cannot be created/written; individual runs never make it throw.
+// Runs everything (or its --shard slice) and writes the outputs. Throws hf::Error for bad options (a shard with
+// more slices than runs included), inputs that cannot be found, or an output folder that cannot be
+// created/written; individual runs never make it throw.
 BenchReport run_bench(const BenchOptions& options);
 
 // `hashfusion bench --merge DIR... --out OUT`: the rows of earlier runs' DIR/results.json in one table, without

@@ -1,8 +1,10 @@
 // The parts of harness.h that do not need the SLAM pipeline.
 #include <algorithm>
+#include <charconv>
 #include <sstream>
 
 #include "bench/harness/harness.h"
+#include "bench/harness/inputs.h"
 #include "core/error.h"
 #include "registration/registration.h"
 
@@ -88,6 +90,36 @@ std::string file_safe(const std::string& label) {
     if (!ok) ch = '_';
   }
   return s.empty() ? "_" : s;
+}
+
+std::vector<PlannedRun> plan_runs(const BenchOptions& o) {
+  std::vector<PlannedRun> runs;
+  for (const BenchInput& input : discover_inputs(o.inputs).inputs) {
+    for (const std::string& m : o.registrations)
+      for (const std::string& mode : o.loop_closure_modes) runs.push_back({input.label, loop_closure_label(m, mode)});
+    for (const std::string& p : o.peers) runs.push_back({input.label, p + " (peer)"});
+  }
+  return runs;
+}
+
+std::pair<int, int> parse_shard(const std::string& text) {
+  const std::string expected = "--shard '" + text + "': expected K/N with 0 <= K < N (slice K of N, from 0)";
+  const size_t slash = text.find('/');
+  if (slash == std::string::npos) throw Error(expected);
+  int k = -1, n = 0;
+  const char* begin = text.data();
+  const char* end = text.data() + text.size();
+  const auto a = std::from_chars(begin, begin + slash, k);
+  const auto b = std::from_chars(begin + slash + 1, end, n);
+  if (a.ec != std::errc() || a.ptr != begin + slash || b.ec != std::errc() || b.ptr != end || slash == 0 ||
+      k < 0 || n < 1 || k >= n)
+    throw Error(expected);
+  return {k, n};
+}
+
+std::pair<size_t, size_t> shard_range(size_t runs, int k, int n) {
+  // 64-bit products: runs * n stays far below 2^64 for any benchmark (runs and n are counts of processes).
+  return {runs * size_t(k) / size_t(n), runs * size_t(k + 1) / size_t(n)};
 }
 
 }  // namespace hf::bench

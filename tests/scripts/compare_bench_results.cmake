@@ -1,0 +1,45 @@
+# A merged `hashfusion bench` sweep (scripts/bench_sweep.slurm) against a single run of the same options:
+# cmake -DSINGLE=single/results.json -DMERGED=sweep/results.json -P compare_bench_results.cmake
+# Equal exactly (as the JSON text of each value, numbers in shortest round-trip form): the methods and inputs in
+# order, every run's method, input, source, status, error, frame counts, coverage, lost spells, ATE, RPE over 1 s
+# and per frame, and the three won-lost-tie tables. Only the speed fields (fps, ms_per_frame, wall_s,
+# worst_frame_ms), machine and notes may differ: they are each task's own. Null values (no RPE over 1 s for a run
+# shorter than 1 s) read as empty and must be null on both sides.
+file(READ ${SINGLE} single)
+file(READ ${MERGED} merged)
+set(differences "")
+foreach(key methods inputs settings won_lost_tie won_lost_tie_rpe won_lost_tie_rpe_frame)
+  string(JSON a GET "${single}" ${key})
+  string(JSON b GET "${merged}" ${key})
+  if(NOT a STREQUAL b)
+    string(APPEND differences "\n  ${key}: single ${a}\n          merged ${b}")
+  endif()
+endforeach()
+string(JSON n_single LENGTH "${single}" runs)
+string(JSON n_merged LENGTH "${merged}" runs)
+if(NOT n_single EQUAL n_merged OR n_single EQUAL 0)
+  message(FATAL_ERROR "runs: single ${n_single}, merged ${n_merged}")
+endif()
+math(EXPR last "${n_single} - 1")
+set(compared 0)
+foreach(k RANGE ${last})
+  foreach(field method input source status error frames frames_bad frames_lost coverage lost_spells longest_lost_spell
+                ate_rmse_m rpe_trans_m_per_s rpe_rot_deg_per_s rpe_frame_trans_m rpe_frame_rot_deg)
+    string(JSON a GET "${single}" runs ${k} ${field})
+    string(JSON b GET "${merged}" runs ${k} ${field})
+    if(NOT a STREQUAL b)
+      string(APPEND differences "\n  runs[${k}].${field}: single '${a}', merged '${b}'")
+    endif()
+    math(EXPR compared "${compared} + 1")
+  endforeach()
+  string(JSON status GET "${single}" runs ${k} status)
+  string(JSON ate GET "${single}" runs ${k} ate_rmse_m)
+  string(JSON rpe GET "${single}" runs ${k} rpe_frame_trans_m)
+  if(NOT status STREQUAL "ok" OR ate STREQUAL "" OR rpe STREQUAL "")
+    string(APPEND differences "\n  runs[${k}] of the single run: status ${status}, ATE '${ate}', RPE per frame '${rpe}' (expected a finished run with both)")
+  endif()
+endforeach()
+if(differences)
+  message(FATAL_ERROR "the merged results differ from the single run:${differences}")
+endif()
+message("equal: ${n_single} runs x 16 fields (${compared} values), methods, inputs, settings and the W-L-T tables by ATE, RPE (1 s) and RPE (1 frame)")
