@@ -87,8 +87,8 @@ std::string final_path(const std::string& f, const OutputTransaction& outputs) {
 void run_bench_command(const BenchCliOptions& c) {
   // The outputs as one transaction (core/output_transaction.h), as `run`'s: built in a private folder beside --out
   // and exchanged with it at the end, so an interruption or a failure leaves the previous set or the new one.
-  OutputTransaction outputs(c.out);
   if (!c.merge.empty()) {
+    OutputTransaction outputs(c.out);
     const bench::BenchReport report =
         bench::merge_bench(c.merge, outputs.folder(), bench::build_source_dir(), c.command_line);
     outputs.commit(previous_bench_run_wrote(outputs.target()));
@@ -101,7 +101,7 @@ void run_bench_command(const BenchCliOptions& c) {
   o.registrations = bench::resolve_registrations(c.registration);
   o.peers = bench::resolve_peers(c.peers);
   o.loop_closure_modes = bench::resolve_loop_closure_modes(c.loop_closure);
-  o.out = outputs.folder();
+  o.out = c.out;
   o.voxel_m = c.voxel_m;
   o.backend = c.backend;
   o.config_file = c.config_file;
@@ -120,6 +120,8 @@ void run_bench_command(const BenchCliOptions& c) {
     for (size_t k = 0; k < runs.size(); ++k) std::cout << k << "\t" << runs[k].input << "\t" << runs[k].method << "\n";
     return;
   }
+  OutputTransaction outputs(c.out);  // listing the runs writes nothing, so takes no lock
+  o.out = outputs.folder();
   InterruptGuard guard;  // Ctrl-C / SIGTERM: finish the current run, write the results, exit 130 / 143
   o.stop = guard.flag();
   const bench::BenchReport report = bench::run_bench(o);
