@@ -8,6 +8,7 @@
 
 #include "apps/commands.h"
 #include "core/error.h"
+#include "core/output_transaction.h"
 #include "head/feature_outputs.h"
 #include "head/feature_spec.h"
 #include "head/head_features.h"
@@ -50,7 +51,12 @@ void run_head_features(const HeadFeaturesArgs& args) {
   } catch (const Error& e) {
     throw Error(args.mesh_path + ": " + e.what());
   }
-  head::write_head_feature_outputs(args.out_dir, mesh, result, options, {args.mesh_path});
+  // One transaction, as `run`'s (core/output_transaction.h): built beside --out and exchanged with it at the end,
+  // so an interruption leaves the previous set or the new one. Files of the old folder this run did not write
+  // are carried over (as before: a head-features folder lists no outputs to tell its own from a user's).
+  OutputTransaction outputs(args.out_dir);
+  head::write_head_feature_outputs(outputs.folder(), mesh, result, options, {args.mesh_path});
+  outputs.commit([](const std::string&) { return false; });
   std::cout << args.mesh_path << ": " << mesh.vertices.size() << " vertices, nose tip vertex "
             << result.frame.nose_tip_vertex << ", " << result.control_points.size() << " of "
             << head::control_point_names().size() << " control points\n";

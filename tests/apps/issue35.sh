@@ -6,6 +6,7 @@
 # could hang runs under `timeout`, so a regression fails (exit 124) instead of blocking the suite.
 set -u
 HF=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
+HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)  # tests/apps, for ../shared beside the repository
 ROOT=$2/issue35_$3
 CASE=$3
 rm -rf "$ROOT" && mkdir -p "$ROOT" && cd "$ROOT" && ROOT=$(pwd) || exit 1
@@ -160,6 +161,20 @@ bench_transaction)  # 35 (build): `bench`'s outputs as one transaction, like `ru
   "$HF" bench --merge o --out o > log 2>&1 || fail "merge into o: $(cat log)"
   [ "$(cat o/notes.txt)" = "my notes" ] || fail "the user's notes.txt was lost"
   [ -f o/results.md ] || fail "merge wrote no results.md"
+  [ -z "$(ls -A . | grep '^\.o\.run-')" ] || fail "private folders left: $(ls -A .)"
+  ;;
+head_transaction)  # 35 (build): `head-features`'s outputs as one transaction, like `run`'s
+  mesh="$HERE/../../../shared/data/head_meshes/libigl_face_head.obj"
+  [ -f "$mesh" ] || { echo "skipped: $mesh not found (../shared absent)"; exit 0; }
+  mkdir o && echo "my notes" > o/notes.txt
+  "$HF" head-features --mesh "$mesh" --out o > log 2>&1 || fail "first run: $(cat log)"
+  [ -f o/report.md ] || fail "no report.md"
+  cp o/report.md first.md
+  # A run that fails after reading (an unknown method) leaves o as it was.
+  "$HF" head-features --mesh "$mesh" --method bogus --out o > log 2>&1 && fail "bogus method: exit 0"
+  cmp -s o/report.md first.md || fail "a failed run changed o/report.md"
+  "$HF" head-features --mesh "$mesh" --out o > log 2>&1 || fail "second run: $(cat log)"
+  [ "$(cat o/notes.txt)" = "my notes" ] || fail "the user's notes.txt was lost"
   [ -z "$(ls -A . | grep '^\.o\.run-')" ] || fail "private folders left: $(ls -A .)"
   ;;
 *)
