@@ -60,11 +60,10 @@ std::string number(double v) {
 // its results.json is a bench's; none for any other folder, so a user's files are always carried over.
 std::function<bool(const std::string&)> previous_bench_run_wrote(const std::string& out) {
   bool bench_folder = false;
-  const std::string results = out + "/results.json";
-  struct stat st {};
-  if (::lstat(results.c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
+  nlohmann::json j;
+  if (read_previous_manifest(out + "/results.json", &j)) {
     try {
-      bench::results_from_json(nlohmann::json::parse(read_regular_file(results, "previous results")), results);
+      bench::results_from_json(j, out + "/results.json");
       bench_folder = true;
     } catch (const std::exception&) {
       bench_folder = false;

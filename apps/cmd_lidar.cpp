@@ -49,23 +49,16 @@ const std::vector<std::string>& lidar_output_names() {
 // without a lidar report.json (a user's folder, another command's report), so every file there is carried over.
 std::function<bool(const std::string&)> previous_lidar_run_wrote(const std::string& out) {
   std::set<std::string> names;
-  const std::string report = out + "/report.json";
-  struct stat st {};
-  if (::lstat(report.c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
-    try {
-      const nlohmann::json j = nlohmann::json::parse(read_regular_file(report, "previous report"));
-      if (j.is_object() && j.contains("parameters") && j.contains("grid") && j.contains("classes")) {
-        const auto& known = lidar_output_names();
-        if (j.contains("outputs") && j["outputs"].is_array()) {
-          for (const nlohmann::json& name : j["outputs"])
-            if (name.is_string() && std::count(known.begin(), known.end(), name.get<std::string>()) > 0)
-              names.insert(name.get<std::string>());
-        } else {
-          names.insert(known.begin(), known.end());
-        }
-      }
-    } catch (const std::exception&) {
-      names.clear();
+  nlohmann::json j;
+  if (read_previous_manifest(out + "/report.json", &j) && j.is_object() && j.contains("parameters") &&
+      j.contains("grid") && j.contains("classes")) {
+    const auto& known = lidar_output_names();
+    if (j.contains("outputs") && j["outputs"].is_array()) {
+      for (const nlohmann::json& name : j["outputs"])
+        if (name.is_string() && std::count(known.begin(), known.end(), name.get<std::string>()) > 0)
+          names.insert(name.get<std::string>());
+    } else {
+      names.insert(known.begin(), known.end());
     }
   }
   return [names](const std::string& name) { return names.count(name) > 0; };

@@ -79,17 +79,9 @@ std::string sketch_interactively(const photogrammetry::Network& network, photogr
 std::function<bool(const std::string&)> previous_model_run_wrote(const std::string& out) {
   static const std::set<std::string> kModelOutputs = {"polygons.json", "model.obj", "model.mtl", "transferred.json",
                                                       "sketch.json",   "textures",  "overlays"};
-  bool model_folder = false;
-  const std::string polygons = out + "/polygons.json";
-  struct stat st {};
-  if (::lstat(polygons.c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
-    try {
-      const nlohmann::json j = nlohmann::json::parse(read_regular_file(polygons, "previous polygons"));
-      model_folder = j.is_object() && j.contains("polygons") && j["polygons"].is_array();
-    } catch (const std::exception&) {
-      model_folder = false;
-    }
-  }
+  nlohmann::json j;
+  const bool model_folder = read_previous_manifest(out + "/polygons.json", &j) && j.is_object() &&
+                            j.contains("polygons") && j["polygons"].is_array();
   return [model_folder](const std::string& name) { return model_folder && kModelOutputs.count(name) > 0; };
 }
 

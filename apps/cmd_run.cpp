@@ -152,20 +152,13 @@ void check_capacity_fits_memory(const slam::PipelineConfig& c) {
 // report.json (a user's folder, a foreign report) are none, so every file there is carried over.
 std::function<bool(const std::string&)> previous_run_wrote(const std::string& out) {
   std::set<std::string> names;
-  const std::string report = out + "/report.json";
-  struct stat st {};
-  if (::lstat(report.c_str(), &st) == 0 && S_ISREG(st.st_mode)) {
-    try {
-      const nlohmann::json j = nlohmann::json::parse(read_regular_file(report, "previous report"));
-      if (j.is_object() && j.contains("outputs") && j["outputs"].is_array() && j.contains("config"))
-        for (const nlohmann::json& name : j["outputs"])
-          if (name.is_string() && std::count(slam::run_output_names().begin(), slam::run_output_names().end(),
-                                             name.get<std::string>()) > 0)
-            names.insert(name.get<std::string>());  // only names a run writes: a report cannot get notes.txt removed
-    } catch (const std::exception&) {
-      names.clear();  // not a run's report: nothing in the folder is known to be a run's
-    }
-  }
+  nlohmann::json j;
+  if (read_previous_manifest(out + "/report.json", &j) && j.is_object() && j.contains("outputs") &&
+      j["outputs"].is_array() && j.contains("config"))
+    for (const nlohmann::json& name : j["outputs"])
+      if (name.is_string() && std::count(slam::run_output_names().begin(), slam::run_output_names().end(),
+                                         name.get<std::string>()) > 0)
+        names.insert(name.get<std::string>());  // only names a run writes: a report cannot get notes.txt removed
   return [names](const std::string& name) { return names.count(name) > 0; };
 }
 

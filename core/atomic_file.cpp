@@ -16,6 +16,9 @@
 #include <streambuf>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
+#include "core/bounded_read.h"
 #include "core/error.h"
 #include "core/output_transaction.h"
 
@@ -367,6 +370,17 @@ void OutputTransaction::commit(const std::function<bool(const std::string&)>& pr
   }
   swap_folder_into_place(folder_, out_);
   committed_ = true;
+}
+
+bool read_previous_manifest(const std::string& path, nlohmann::json* json) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return false;
+  try {
+    *json = nlohmann::json::parse(read_regular_file(path, "previous manifest"));
+    return true;
+  } catch (const std::exception&) {
+    return false;
+  }
 }
 
 }  // namespace hf

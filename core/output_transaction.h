@@ -23,6 +23,8 @@
 #include <functional>
 #include <string>
 
+#include <nlohmann/json_fwd.hpp>
+
 namespace hf {
 
 class OutputTransaction {
@@ -50,5 +52,10 @@ class OutputTransaction {
   int lock_fd_ = -1;
   bool committed_ = false;
 };
+
+// The JSON manifest a previous run left in its folder (OUT/report.json, OUT/results.json, ...), for the
+// previous_run_wrote functions given to commit(): true with *json set when `path` is a regular file (a link is not
+// followed) that parses; false otherwise (absent, a link, a folder, not JSON), when the folder is a user's.
+bool read_previous_manifest(const std::string& path, nlohmann::json* json);
 
 }  // namespace hf
