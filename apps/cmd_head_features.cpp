@@ -6,8 +6,10 @@
 #include <memory>
 #include <string>
 
+#include "apps/cli_common.h"
 #include "apps/commands.h"
 #include "core/error.h"
+#include "core/output_transaction.h"
 #include "head/feature_outputs.h"
 #include "head/feature_spec.h"
 #include "head/head_features.h"
@@ -26,6 +28,7 @@ struct HeadFeaturesArgs {
 };
 
 void run_head_features(const HeadFeaturesArgs& args) {
+  if (args.mesh_path.empty()) throw Error("head-features: --input MESH is required");
   head::HeadFeatureOptions options;
   options.evaluation = head::parse_evaluation(args.method);
   options.quantity = head::parse_quantity(args.quantity);
@@ -50,7 +53,12 @@ void run_head_features(const HeadFeaturesArgs& args) {
   } catch (const Error& e) {
     throw Error(args.mesh_path + ": " + e.what());
   }
-  head::write_head_feature_outputs(args.out_dir, mesh, result, options, {args.mesh_path});
+  // One transaction, as `run`'s (core/output_transaction.h): built beside --out and exchanged with it at the end,
+  // so an interruption leaves the previous set or the new one. Files of the old folder this run did not write
+  // are carried over (as before: a head-features folder lists no outputs to tell its own from a user's).
+  OutputTransaction outputs(args.out_dir);
+  head::write_head_feature_outputs(outputs.folder(), mesh, result, options, {args.mesh_path});
+  outputs.commit([](const std::string&) { return false; });
   std::cout << args.mesh_path << ": " << mesh.vertices.size() << " vertices, nose tip vertex "
             << result.frame.nose_tip_vertex << ", " << result.control_points.size() << " of "
             << head::control_point_names().size() << " control points\n";
@@ -66,7 +74,8 @@ void add_head_features_command(CLI::App& app) {
       "head-features",
       "features, important areas and control points of a triangulated human head (Kubasková): curvatures, MLS, "
       "Laplace-Beltrami, thresholding, mesh morphology");
-  cmd->add_option("--mesh", args->mesh_path, "head mesh, .ply or .obj (any pose and unit)")->required();
+  auto* input = cmd->add_option("--input", args->mesh_path, "head mesh, .ply or .obj (any pose and unit); required");
+  add_deprecated_alias(cmd, input, "--mesh", args->mesh_path);
   cmd->add_option("--out", args->out_dir, "output folder (created)")->required();
   cmd->add_option("--method", args->method, "evaluation for the features: discrete, mls or laplace")
       ->capture_default_str();
@@ -82,7 +91,7 @@ void add_head_features_command(CLI::App& app) {
   cmd->add_option("--area-k", args->area_k, "important-area morphology k (0: 5/10/15 by vertex count)")
       ->capture_default_str();
   cmd->add_option("--separation", args->separation, "important-area separation method, 1 or 2 (section 3.3)")
-      ->check(CLI::Range(1, 2))
+      ->check(in_range(1, 2))
       ->capture_default_str();
   cmd->add_flag("--no-final-dilation", args->no_final_dilation, "skip the important areas' last dilation");
   cmd->add_flag("--physical-scale", args->physical_scale,

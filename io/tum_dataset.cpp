@@ -118,7 +118,15 @@ TumDataset::TumDataset(const std::string& folder, const DatasetOptions& options)
   const std::vector<TumListEntry> rgb = read_tum_list((dir / "rgb.txt").string());
   const std::vector<TumListEntry> depth = read_tum_list((dir / "depth.txt").string());
   const fs::path gt_path = dir / "groundtruth.txt";
-  if (fs::exists(gt_path, ec)) ground_truth_ = read_tum_trajectory(gt_path.string());
+  // Absent: no ground truth. Present in any other form (a link loop, a dangling link, no permission to look):
+  // an error naming it, not a run silently without ground truth (issue 35's leftover).
+  std::error_code gt_ec;
+  const bool gt_exists = fs::exists(gt_path, gt_ec);
+  const bool gt_is_link = fs::is_symlink(fs::symlink_status(gt_path, ec));
+  if (gt_ec || (gt_is_link && !gt_exists))
+    throw Error(gt_path.string() + ": cannot read the ground truth (" +
+                (gt_ec ? gt_ec.message() : std::string("a link to nothing")) + ")");
+  if (gt_exists) ground_truth_ = read_tum_trajectory(gt_path.string());
   camera_ = choose_tum_camera(folder, options.camera);
 
   std::vector<double> rgb_stamps, depth_stamps;
