@@ -238,7 +238,7 @@ nlohmann::json section_to_json(S& s) {
 template <class S>
 void section_from_json(const nlohmann::json& j, const std::string& where, S& s) {
   if (!j.is_object()) throw Error(where + ": expected an object");
-  FromJson f{&j, where};
+  FromJson f{&j, where, 0, ""};
   // "x.json: volume" -> "volume": the section's rows in the reference.
   const size_t colon = where.rfind(": ");
   f.section = colon == std::string::npos ? where : where.substr(colon + 2);
@@ -383,7 +383,7 @@ namespace {
 PipelineConfig pipeline_config_from_json_unnamed(const nlohmann::json& j, const std::string& where) {
   if (!j.is_object()) throw Error(where + ": expected a JSON object");
   PipelineConfig c;
-  FromJson f{&j, where};
+  FromJson f{&j, where, 0, ""};
   visit_scalars(f, c);
   // The method first: the registration options start from its defaults.
   static const char* sections[] = {"volume", "integrate", "raycast", "pyramid", "registration_options",
