@@ -144,7 +144,7 @@ DepthImage depth_from_array(const py::handle& array, const char* what, const py:
       throw ValueError(std::string(what) + ": uint16 depth of shape " + shape_of(any) +
                        " needs depth_scale, its units per metre (1000 for millimetres as Open3D reads PNGs, 5000 "
                        "for TUM RGB-D); it is not guessed");
-    const double scale = py::float_(depth_scale).cast<double>();
+    const double scale = py::float_(py::reinterpret_borrow<py::object>(depth_scale)).cast<double>();
     if (!std::isfinite(scale) || scale <= 0.0)
       throw ValueError(std::string(what) + ": depth_scale must be a finite number > 0 (units per metre), got " +
                        depth_number(scale));
