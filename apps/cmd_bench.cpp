@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "apps/cli_common.h"
 #include "apps/commands.h"
 #include "apps/interrupt.h"
 #include "bench/harness/harness.h"
@@ -168,27 +169,27 @@ void add_bench_command(CLI::App& app) {
                   "`bench --merge` of the N --out folders in K order gives the single run's tables)");
   cmd->add_flag("--list-runs", opts->list_runs,
                 "print the runs (INDEX, INPUT, METHOD per line, tab-separated) that --shard slices, and run nothing");
-  cmd->add_option("--voxel-m", opts->voxel_m, "TSDF voxel size in metres")->check(CLI::PositiveNumber)
+  cmd->add_option("--voxel-m", opts->voxel_m, "TSDF voxel size in metres")->check(voxel_m_range())
       ->capture_default_str();
   cmd->add_option("--backend", opts->backend, "reduction backend: cpu | opencl")->capture_default_str();
   cmd->add_option("--config", opts->config_file, "JSON pipeline configuration shared by every run (see hashfusion run)");
   cmd->add_option("--tracking-level", opts->tracking_level,
                   "pyramid level tracking starts at (0 full, 1 half resolution); default: the configuration's")
-      ->check(CLI::Range(0, 2));
+      ->check(tracking_level_range());
   cmd->add_option("--max-frames", opts->max_frames, "frames per run (0 = all)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative())
       ->capture_default_str();
   cmd->add_option("--synthetic-frames", opts->synthetic_frames, "frames rendered per synthetic preset")
-      ->check(CLI::Range(2, 100000))
+      ->check(in_range(2, 100000))
       ->capture_default_str();
   cmd->add_option("--peer-voxel-m", opts->peer_voxel_m, "voxel-grid size of the peers' clouds in metres")
-      ->check(CLI::PositiveNumber)
+      ->check(positive())
       ->capture_default_str();
   cmd->add_option("--ndt-resolution-m", opts->ndt_resolution_m, "NDT cell size in metres")
-      ->check(CLI::PositiveNumber)
+      ->check(positive())
       ->capture_default_str();
   cmd->add_option("--peer-pixel-stride", opts->peer_pixel_stride, "peers back-project every k-th pixel")
-      ->check(CLI::Range(1, 64))
+      ->check(in_range(1, 64))
       ->capture_default_str();
   cmd->callback([opts] {
     if (opts->inputs.empty() && opts->merge.empty()) throw Error("bench: --input is required (or --merge DIR... to combine earlier results)");

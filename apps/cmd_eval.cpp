@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "apps/cli_common.h"
 #include "apps/commands.h"
 #include "core/error.h"
 #include "io/trajectory_io.h"
@@ -92,13 +93,21 @@ void add_eval_command(CLI::App& app) {
                   "write a PNG of the ground truth and the aligned estimate coloured by ATE error");
   cmd->add_flag("--json", args->json, "print one JSON object instead of the table");
   cmd->add_flag("--per-frame", args->per_frame, "also print the per-pose ATE and per-pair RPE values");
-  cmd->add_option("--max-difference", args->max_difference_s,
-                  "largest time difference (s) for associating a ground-truth and an estimated pose")
-      ->capture_default_str();
-  cmd->add_option("--offset", args->offset_s, "time offset (s) added to the estimate's timestamps")
-      ->capture_default_str();
-  cmd->add_option("--delta", args->delta_s, "RPE pose distance in seconds (errors are reported per second)")
-      ->capture_default_str();
+  auto* max_difference = cmd->add_option("--max-difference-s", args->max_difference_s,
+                                         "largest time difference (s) for associating a ground-truth and an "
+                                         "estimated pose")
+                              ->check(in_range(0.0, 1e6, "s"))
+                              ->capture_default_str();
+  add_deprecated_alias(cmd, max_difference, "--max-difference", args->max_difference_s)->check(in_range(0.0, 1e6));
+  auto* offset = cmd->add_option("--offset-s", args->offset_s, "time offset (s) added to the estimate's timestamps")
+                     ->check(in_range(-1e9, 1e9, "s"))
+                     ->capture_default_str();
+  add_deprecated_alias(cmd, offset, "--offset", args->offset_s)->check(in_range(-1e9, 1e9));
+  auto* delta = cmd->add_option("--delta-s", args->delta_s,
+                                "RPE pose distance in seconds (errors are reported per second)")
+                    ->check(in_range(1e-6, 1e6, "s"))
+                    ->capture_default_str();
+  add_deprecated_alias(cmd, delta, "--delta", args->delta_s)->check(in_range(1e-6, 1e6));
   cmd->callback([args] { run_eval(*args); });
 }
 

@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 
+#include "apps/cli_common.h"
 #include "apps/commands.h"
 #include "apps/interrupt.h"
 #include "core/camera.h"
@@ -128,15 +129,16 @@ void add_generate_command(CLI::App& app) {
   cmd->add_option("--camera", args->camera, "Camera preset name or camera file (resolution and intrinsics)")->capture_default_str();
   cmd->add_flag("--no-noise", args->no_noise, "Exact depth and colour: no sensor model");
   cmd->add_flag("--force", args->force, "Replace an existing output folder (only one a previous generate wrote)");
-  cmd->add_option("--mesh", args->mesh, "Render an orbit around this .ply / .obj mesh instead of a preset");
-  cmd->add_option("--mesh-scale", args->mesh_scale, "--mesh: metres per mesh unit")->capture_default_str();
-  cmd->add_option("--orbit-distance-m", args->orbit_distance_m, "--mesh: camera distance from the centroid")->capture_default_str();
-  cmd->add_option("--elevation-deg", args->elevation_deg, "--mesh: orbit elevation above the plane normal to --up")->capture_default_str();
-  cmd->add_option("--orbit-start", args->orbit_start, "--mesh: direction of the first camera from the centroid (mesh axes), x,y,z")
+  auto* input = cmd->add_option("--input", args->mesh, "Render an orbit around this .ply / .obj mesh instead of a preset");
+  add_deprecated_alias(cmd, input, "--mesh", args->mesh);
+  cmd->add_option("--mesh-scale", args->mesh_scale, "--input MESH: metres per mesh unit")->capture_default_str();
+  cmd->add_option("--orbit-distance-m", args->orbit_distance_m, "--input MESH: camera distance from the centroid")->capture_default_str();
+  cmd->add_option("--elevation-deg", args->elevation_deg, "--input MESH: orbit elevation above the plane normal to --up")->capture_default_str();
+  cmd->add_option("--orbit-start", args->orbit_start, "--input MESH: direction of the first camera from the centroid (mesh axes), x,y,z")
       ->delimiter(',')->expected(3);
-  cmd->add_option("--up", args->up, "--mesh: the orbit's up direction (mesh axes), x,y,z")->delimiter(',')->expected(3);
+  cmd->add_option("--up", args->up, "--input MESH: the orbit's up direction (mesh axes), x,y,z")->delimiter(',')->expected(3);
   cmd->add_option("--max-incidence-deg", args->max_incidence_deg,
-                  "--mesh: depth beyond this incidence angle is dropped (grazing pixels fuse into fins; bench/results/head.md)")
+                  "--input MESH: depth beyond this incidence angle is dropped (grazing pixels fuse into fins; bench/results/head.md)")
       ->capture_default_str();
   cmd->callback([args] { run_generate(*args); });
 }

@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "apps/cli_common.h"
 #include "apps/commands.h"
 #include "core/error.h"
 #include "core/output_transaction.h"
@@ -27,6 +28,7 @@ struct HeadFeaturesArgs {
 };
 
 void run_head_features(const HeadFeaturesArgs& args) {
+  if (args.mesh_path.empty()) throw Error("head-features: --input MESH is required");
   head::HeadFeatureOptions options;
   options.evaluation = head::parse_evaluation(args.method);
   options.quantity = head::parse_quantity(args.quantity);
@@ -72,7 +74,8 @@ void add_head_features_command(CLI::App& app) {
       "head-features",
       "features, important areas and control points of a triangulated human head (Kubasková): curvatures, MLS, "
       "Laplace-Beltrami, thresholding, mesh morphology");
-  cmd->add_option("--mesh", args->mesh_path, "head mesh, .ply or .obj (any pose and unit)")->required();
+  auto* input = cmd->add_option("--input", args->mesh_path, "head mesh, .ply or .obj (any pose and unit); required");
+  add_deprecated_alias(cmd, input, "--mesh", args->mesh_path);
   cmd->add_option("--out", args->out_dir, "output folder (created)")->required();
   cmd->add_option("--method", args->method, "evaluation for the features: discrete, mls or laplace")
       ->capture_default_str();
@@ -88,7 +91,7 @@ void add_head_features_command(CLI::App& app) {
   cmd->add_option("--area-k", args->area_k, "important-area morphology k (0: 5/10/15 by vertex count)")
       ->capture_default_str();
   cmd->add_option("--separation", args->separation, "important-area separation method, 1 or 2 (section 3.3)")
-      ->check(CLI::Range(1, 2))
+      ->check(in_range(1, 2))
       ->capture_default_str();
   cmd->add_flag("--no-final-dilation", args->no_final_dilation, "skip the important areas' last dilation");
   cmd->add_flag("--physical-scale", args->physical_scale,

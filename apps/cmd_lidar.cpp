@@ -12,6 +12,7 @@
 #include <set>
 #include <sstream>
 
+#include "apps/cli_common.h"
 #include "apps/commands.h"
 #include "core/atomic_file.h"
 #include "core/bounded_read.h"
@@ -264,8 +265,12 @@ void add_lidar_command(CLI::App& app) {
   cmd->add_option("--input", args->inputs, "LAS 1.0-1.4 files (LAZ must be decompressed first), or synthetic:SEED");
   cmd->add_option("--out", args->out, "output folder")->required();
   cmd->add_option("--cell-m", args->cell_m, "grid resolution r in metres")->capture_default_str();
-  cmd->add_option("--t", args->t_s, "t^S: dilation radius per metre of building height")->capture_default_str();
-  cmd->add_option("--areas", args->areas, "area thresholds a1,a2,a3 in m^2 (default 50000,1000000,5000000)");
+  auto* t = cmd->add_option("--t-m-per-m", args->t_s, "t^S: dilation radius (m) per metre of building height")
+                ->capture_default_str();
+  add_deprecated_alias(cmd, t, "--t", args->t_s);
+  auto* areas = cmd->add_option("--areas-m2", args->areas,
+                                "area thresholds a1,a2,a3 in m^2 (default 50000,1000000,5000000)");
+  add_deprecated_alias(cmd, areas, "--areas", args->areas);
   cmd->add_option("--ground-margin-m", args->ground_margin_m, "ground box around each building (metres)")->capture_default_str();
   cmd->add_option("--footprints", args->footprints, "building footprints (any GDAL vector format) to validate the building mask");
   cmd->add_option("--footprint-layer", args->footprint_layer, "layer of --footprints (default: the first)");

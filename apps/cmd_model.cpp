@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "apps/cli_common.h"
 #include "apps/commands.h"
 #include "core/atomic_file.h"
 #include "core/bounded_read.h"
@@ -86,6 +87,7 @@ std::function<bool(const std::string&)> previous_model_run_wrote(const std::stri
 }
 
 void run_model(ModelArgs a) {
+  if (a.shots.empty()) throw Error("model: --input NETWORK is required");
   photogrammetry::RunShotsOptions run;
   run.dataset = a.dataset;
   run.keyframes_only = !a.all_frames;
@@ -144,10 +146,11 @@ void add_model_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "model", "3D building polygons from 2D sketches on oriented photos (Kellner): multi-shot DLT, cloud planes, "
                "planes of existing polygons, guidance states, edge snapping, textures");
-  cmd->add_option("--shots", a->shots,
-                  "the network: an OpenMVS dump folder (cameras_from_scene_mvs.txt), a Middlebury *_par.txt (or its "
-                  "folder), or a hashfusion run folder (report.json; keyframes become shots)")
-      ->required();
+  auto* input = cmd->add_option("--input", a->shots,
+                                "the network (required): an OpenMVS dump folder (cameras_from_scene_mvs.txt), a "
+                                "Middlebury *_par.txt (or its folder), or a hashfusion run folder (report.json; "
+                                "keyframes become shots)");
+  add_deprecated_alias(cmd, input, "--shots", a->shots);
   cmd->add_option("--polygons", a->polygons,
                   "SKETCH.json: 2D polygons per shot (README: Photogrammetric modelling); required unless sketching "
                   "with --interactive / --events, which start from it when given");
@@ -166,14 +169,14 @@ void add_model_command(CLI::App& app) {
                 "transfer each polygon sketched in one shot and placed on a plane into the other shots that see it "
                 "(section 5.2, edge colour histograms): transferred.json, a sketch to run model on again");
   cmd->add_option("--acceptance", a->acceptance_h, "acceptance threshold of the cloud fit h = m r / n")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(in_range(0.0, 1.0))
       ->capture_default_str();
   cmd->add_option("--ransac-threshold", a->ransac_threshold,
                   "RANSAC inlier distance in the network's units (0: 0.5 % of the cloud's robust extent)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative())
       ->capture_default_str();
   cmd->add_option("--texture-px", a->texture_px, "longest texture side in texels")
-      ->check(CLI::Range(8, 16384))
+      ->check(in_range(8, 16384, "texels"))
       ->capture_default_str();
   cmd->add_flag("--no-textures", a->no_textures, "skip textures (model.obj is written untextured)");
   cmd->add_flag("--no-overlays", a->no_overlays, "skip the per-shot overlay images");

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "apps/cli_common.h"
 #include "apps/commands.h"
 #include "apps/interrupt.h"
 #include "core/error.h"
@@ -67,8 +68,8 @@ void add_record_command(CLI::App& app) {
                   "openni2://[URI], FILE.oni, v4l2:///dev/videoN[+/dev/videoM], libcamera://[ID]")
       ->required();
   cmd->add_option("--out", opts->out, "the folder to create (must not exist)")->required();
-  auto* frames = cmd->add_option("--frames", opts->frames, "stop after N frames")->check(CLI::PositiveNumber);
-  cmd->add_option("--seconds", opts->seconds, "stop after S seconds")->check(CLI::PositiveNumber)->excludes(frames);
+  auto* frames = cmd->add_option("--frames", opts->frames, "stop after N frames")->check(positive());
+  cmd->add_option("--seconds", opts->seconds, "stop after S seconds")->check(positive())->excludes(frames);
   cmd->add_option("--camera", opts->camera, "camera preset or file (default: the device's, else ros)");
   cmd->add_option("--live-mode", opts->live_mode, "WIDTHxHEIGHT@FPS to ask the device for")->capture_default_str();
   cmd->callback([opts] { record(*opts); });

@@ -13,21 +13,26 @@
 #include <iostream>
 #include <set>
 
+#include "apps/build_info.h"
+#include "apps/cli_common.h"
 #include "apps/commands.h"
 #include "apps/interrupt.h"
+#include "apps/invocation.h"
 #include "core/atomic_file.h"
 #include "core/bounded_read.h"
 #include "core/error.h"
 #include "core/output_transaction.h"
 #include "datasets/synthetic_source.h"
 #include "fusion/voxel_block_grid.h"
+#include "fusion/volume_io.h"
 #include "io/dataset.h"
 #include "io/live_input.h"
+#include "io/pcd.h"
+#include "io/ply.h"
 #include "io/replay_source.h"
 #include "slam/pipeline.h"
 #include "slam/sequence_run.h"
 #if HF_HAVE_VIEWER
-#include "io/ply.h"
 #include "viewer/run_viewer.h"
 #endif
 
@@ -53,7 +58,22 @@ struct RunOptions {
   bool view = false;                     // --view: the viewer follows the run
   std::string screenshot;                // --screenshot FILE.png: headless viewer, final view
   long screenshot_every = 0;             // --screenshot-every N: headless, every N frames too
+  std::string save_map;                  // --save-map [FILE]: "" none; a bare name lands in --out
+  std::string load_map;                  // --load-map FILE: continue in this map
+  std::string save_cloud;                // --save-cloud [FILE.ply|.pcd]
 };
+
+// The surface cloud as PLY or PCD by the extension (io/pcd.h goes through PCL, linked here, not in hf_slam).
+void write_cloud_file(const std::string& path, const PointCloud& cloud) {
+  const std::string ext = std::filesystem::path(path).extension().string();
+  if (ext == ".ply") {
+    write_ply(path, cloud);
+  } else if (ext == ".pcd") {
+    write_pcd(path, cloud);
+  } else {
+    throw Error(path + ": expected a point cloud file name ending in .ply or .pcd");
+  }
+}
 
 #if HF_HAVE_VIEWER
 // The viewer hooks into the loop through RunControl::observe (slam/sequence_run.h): a snapshot copy per frame,
@@ -176,6 +196,15 @@ void run(const RunOptions& o, const CLI::App& cmd) {
             << "registration: " << config.registration << " (backend " << config.backend << "), voxel "
             << config.volume.voxel_m * 1000.0 << " mm\n";
   slam::Pipeline pipeline(config, source->camera());
+  if (!o.load_map.empty()) {
+    fusion::Volume map = fusion::load_volume(o.load_map);
+    try {
+      pipeline.load_map(std::move(map.grid), std::move(map.store));
+    } catch (const Error& e) {
+      throw Error(o.load_map + ": " + e.what());
+    }
+    std::cerr << "map: continuing in " << o.load_map << " (" << pipeline.map().block_count() << " blocks)\n";
+  }
 
   slam::RunControl control;
   control.max_frames = o.max_frames;
@@ -207,9 +236,17 @@ void run(const RunOptions& o, const CLI::App& cmd) {
   if (!result.input_ended.empty())
     std::cerr << "input ended: " << result.input_ended << ": writing outputs for the " << result.frames.size()
               << " frames processed\n";
-  const slam::RunSummary summary = slam::summarize(result, pipeline, *source, o.input);
+  slam::RunSummary summary = slam::summarize(result, pipeline, *source, o.input);
+  summary.version = build_version();
+  summary.commit = build_commit();
+  summary.command_line = invocation_command_line();
+  summary.started_utc = invocation_started_utc();
+  slam::RunOutputOptions extra;
+  extra.map = o.save_map;
+  extra.cloud = o.save_cloud;
+  extra.write_cloud = write_cloud_file;
   const std::vector<std::string> written =
-      slam::write_run_outputs(outputs.folder(), result, summary, pipeline, *source);
+      slam::write_run_outputs(outputs.folder(), result, summary, pipeline, *source, extra);
   outputs.commit(previous_run_wrote(outputs.target()));
   std::cout << "outputs:\n";
   for (const auto& p : written)
@@ -259,11 +296,11 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--registration", opts->registration, "registration method, or groundtruth (fusion only)")
       ->capture_default_str();
   cmd->add_option("--backend", opts->backend, "reduction backend: cpu | opencl")->capture_default_str();
-  cmd->add_option("--voxel-m", opts->voxel_m, "voxel size in metres")->check(CLI::Range(1e-4, 10.0))
+  cmd->add_option("--voxel-m", opts->voxel_m, "voxel size in metres")->check(voxel_m_range())
       ->capture_default_str();
   cmd->add_option("--tracking-level", opts->tracking_level,
                   "pyramid level tracking starts at (0 full, 1 half, 2 quarter resolution); default: the configuration's")
-      ->check(CLI::Range(0, 2));
+      ->check(tracking_level_range());
   cmd->add_option("--camera", opts->camera, "camera preset name or camera file (default: chosen per dataset)");
   cmd->add_flag("--view", opts->view, "a window follows the run (model, trajectory, input; space pause, n step, "
                "r reset view, s save mesh, q quit; drag to orbit, scroll to zoom)");
@@ -271,7 +308,7 @@ void add_run_command(CLI::App& app) {
                   "headless viewer: write the final mesh's OpenGL view from the last pose to FILE.png");
   cmd->add_option("--screenshot-every", opts->screenshot_every,
                   "with --screenshot: also FILE_NNNNNN.png of the model so far every N frames")
-      ->check(CLI::PositiveNumber);
+      ->check(positive());
   cmd->add_option("--live-mode", opts->live_mode, "live inputs: WIDTHxHEIGHT@FPS to ask the device for")
       ->capture_default_str();
   cmd->add_flag("--realtime", opts->realtime,
@@ -284,13 +321,41 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--config", opts->config_file, "JSON pipeline configuration (report.json's \"config\" form)");
   cmd->add_option("--capacity-blocks", opts->capacity_blocks,
                   "voxel block pool size, 4 KiB per block (default: the configuration's, 131072 = 512 MiB)")
-      ->check(CLI::Range(size_t(1), size_t(1) << 26));
-  cmd->add_option("--max-frames", opts->max_frames, "stop after N frames (0 = all)")->check(CLI::NonNegativeNumber);
+      ->check(in_range(1, double(size_t(1) << 26), "blocks"));
+  cmd->add_option("--max-frames", opts->max_frames, "stop after N frames (0 = all)")->check(non_negative());
   cmd->add_option("--synthetic-frames", opts->synthetic_frames, "frames of a synthetic: input")
-      ->check(CLI::Range(1, 100000))
+      ->check(in_range(1, 100000))
       ->capture_default_str();
   cmd->add_option("--seed", opts->seed, "noise seed of a synthetic: input")->capture_default_str();
-  cmd->callback([opts, cmd] { run(*opts, *cmd); });
+  cmd->add_option("--save-map", opts->save_map,
+                  "also write the map (the TSDF volume, fusion/volume_io.h; no keyframes) to FILE, by default "
+                  "map.hfmap in --out; written with the other outputs, also after Ctrl-C / SIGTERM")
+      ->expected(0, 1)
+      ->default_str("map.hfmap");
+  cmd->add_option("--load-map", opts->load_map,
+                  "continue in a saved map: the first frame is placed at its ground-truth pose, else at the map's "
+                  "origin (the first camera of the session that built it); voxel size as the map's");
+  cmd->add_option("--save-cloud", opts->save_cloud,
+                  "also write the surface as a point cloud with colour and normals, FILE.ply or FILE.pcd, by "
+                  "default cloud.ply in --out")
+      ->expected(0, 1)
+      ->default_str("cloud.ply");
+  cmd->callback([opts, cmd] {
+    // A flag given without a value takes its default name in --out (CLI11 leaves the value empty then).
+    if (cmd->count("--save-map") && opts->save_map.empty()) opts->save_map = "map.hfmap";
+    if (cmd->count("--save-cloud") && opts->save_cloud.empty()) opts->save_cloud = "cloud.ply";
+    if (!opts->save_map.empty() && std::filesystem::path(opts->save_map).parent_path().empty() &&
+        opts->save_map != "map.hfmap")
+      throw Error("--save-map: a bare file name must be map.hfmap (in --out); give a path for another place");
+    if (!opts->save_cloud.empty() && std::filesystem::path(opts->save_cloud).parent_path().empty() &&
+        opts->save_cloud != "cloud.ply" && opts->save_cloud != "cloud.pcd")
+      throw Error("--save-cloud: a bare file name must be cloud.ply or cloud.pcd (in --out); give a path for another");
+    // Other paths are the user's, relative to where the command runs (write_run_outputs puts relative names in --out).
+    for (std::string* path : {&opts->save_map, &opts->save_cloud})
+      if (!path->empty() && !std::filesystem::path(*path).parent_path().empty())
+        *path = std::filesystem::absolute(*path).string();
+    run(*opts, *cmd);
+  });
 }
 
 }  // namespace hf::apps

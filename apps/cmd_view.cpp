@@ -16,10 +16,12 @@ void add_view_command(CLI::App& app) {
   auto screenshot = std::make_shared<std::string>();
   auto camera = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand("view", "Browse a mesh, a saved map or a run's output folder in the viewer");
-  cmd->add_option("path", *path, "mesh.ply, map.hfmap or a `run` output folder")->required();
+  auto* input = cmd->add_option("--input", *path, "mesh.ply, map.hfmap or a `run` output folder");
+  cmd->add_option("path", *path, "the same as --input (either one)")->excludes(input);
   cmd->add_option("--screenshot", *screenshot, "render one view into this PNG and exit (headless)");
   cmd->add_option("--camera", *camera, "camera preset or file for the view (default: the run's, else ros)");
   cmd->callback([path, screenshot, camera] {
+    if (path->empty()) throw Error("view: --input PATH is required");
 #if HF_HAVE_VIEWER
     viewer::ViewFilesOptions o;
     o.screenshot = *screenshot;

@@ -18,5 +18,6 @@ void add_devices_command(CLI::App& app);   // apps/cmd_devices.cpp
 void add_record_command(CLI::App& app);    // apps/cmd_record.cpp
 void add_view_command(CLI::App& app);      // apps/cmd_view.cpp
 void add_model_command(CLI::App& app);     // apps/cmd_model.cpp
+void add_config_command(CLI::App& app);    // apps/cmd_config.cpp
 
 }  // namespace hf::apps

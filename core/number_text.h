@@ -1,8 +1,11 @@
 // Numbers from untrusted input, printed short in messages whatever their size.
 #pragma once
 
+#include <charconv>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
+#include <system_error>
 
 namespace hf {
 
@@ -12,6 +15,17 @@ inline std::string number_for_message(double value) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.6g", value);
   return buffer;
+}
+
+// The double whose shortest decimal form is the float's: 0.1f becomes 0.1, not 0.10000000149011612, so a float
+// written into JSON (which holds doubles, printed shortest-round-trip) reads as the value that was set, and reads
+// back into the same float.
+inline double float_as_shortest_double(float value) {
+  char buffer[32];
+  const auto r = std::to_chars(buffer, buffer + sizeof buffer - 1, value);
+  if (r.ec != std::errc()) return double(value);
+  *r.ptr = '\0';
+  return std::strtod(buffer, nullptr);
 }
 
 }  // namespace hf

@@ -1,6 +1,7 @@
 #include "datasets/synthetic_source.h"
 
 #include <cstring>
+#include <optional>
 
 #include "core/error.h"
 
@@ -19,19 +20,13 @@ class SyntheticSource : public FrameSource {
   }
 
   FrameRead next() override {
-    FrameRead r;
-    if (next_ >= sequence_.size()) return r;  // end
-    SyntheticFrame f = sequence_.frame(next_);
-    r.status = FrameStatus::ok;
-    r.frame.index = size_t(next_);
-    r.frame.timestamp_s = f.timestamp_s;
-    r.frame.depth = std::move(f.depth);
-    r.frame.color = std::move(f.color);
-    r.frame.T_world_camera_gt = f.T_world_camera;
-    r.frame.depth_file = name_ + " depth " + std::to_string(next_);
-    r.frame.color_file = name_ + " colour " + std::to_string(next_);
-    ++next_;
-    return r;
+    if (next_ >= sequence_.size()) return FrameRead{};  // end
+    return render(next_++);
+  }
+  // Frame i depends only on (options, i) (datasets/synthetic_sequence.h), so out of order is the same frame.
+  std::optional<FrameRead> read_at(size_t index) const override {
+    if (index >= size_t(sequence_.size())) return std::nullopt;
+    return render(int(index));
   }
   const PinholeCamera& camera() const override { return sequence_.camera(); }
   const std::string& camera_origin() const override { return origin_; }
@@ -40,6 +35,20 @@ class SyntheticSource : public FrameSource {
   const Trajectory& ground_truth() const override { return ground_truth_; }
 
  private:
+  FrameRead render(int i) const {
+    FrameRead r;
+    SyntheticFrame f = sequence_.frame(i);
+    r.status = FrameStatus::ok;
+    r.frame.index = size_t(i);
+    r.frame.timestamp_s = f.timestamp_s;
+    r.frame.depth = std::move(f.depth);
+    r.frame.color = std::move(f.color);
+    r.frame.T_world_camera_gt = f.T_world_camera;
+    r.frame.depth_file = name_ + " depth " + std::to_string(i);
+    r.frame.color_file = name_ + " colour " + std::to_string(i);
+    return r;
+  }
+
   SyntheticSequence sequence_;
   std::string name_, origin_;
   Trajectory ground_truth_;

@@ -78,6 +78,10 @@ class FrameSource {
   // The dataset's own ground-truth trajectory (T_world_camera with time stamps; empty when it has none), for
   // evaluating estimated trajectories against.
   virtual const Trajectory& ground_truth() const = 0;
+  // Frame `index` (0-based, as RgbdFrame::index) read out of order, without moving next()'s cursor; nullopt when
+  // the source has no random access (a live device) or `index` >= size(). Const and thread-safe like the accessors:
+  // it may run while next() runs on another thread (PrefetchingSource's), for the Python bindings' data[i].
+  virtual std::optional<FrameRead> read_at(size_t /*index*/) const { return std::nullopt; }
   // Live sources: the capture counters so far (thread-safe); nullopt for datasets.
   virtual std::optional<CaptureStats> capture_stats() const { return std::nullopt; }
 };

@@ -35,6 +35,7 @@ class PrefetchingSource : public FrameSource {
   const PinholeCamera& camera() const override { return inner_->camera(); }
   const std::string& camera_origin() const override { return inner_->camera_origin(); }
   size_t size() const override { return inner_->size(); }
+  std::optional<FrameRead> read_at(size_t index) const override { return inner_->read_at(index); }
   const std::string& name() const override { return inner_->name(); }
   const Trajectory& ground_truth() const override { return inner_->ground_truth(); }
   std::optional<CaptureStats> capture_stats() const override { return inner_->capture_stats(); }

@@ -45,6 +45,10 @@ class SevenScenesDataset : public FrameSource {
   explicit SevenScenesDataset(const std::string& folder, const DatasetOptions& options = {});
 
   FrameRead next() override;
+  std::optional<FrameRead> read_at(size_t index) const override {
+    if (index >= frames_.size()) return std::nullopt;
+    return read(index);
+  }
   const PinholeCamera& camera() const override { return camera_.camera; }
   const std::string& camera_origin() const override { return camera_.origin; }
   size_t size() const override { return frames_.size(); }

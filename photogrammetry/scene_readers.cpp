@@ -195,21 +195,27 @@ RunReport parse_run_report(const std::string& text, const std::string& file) {
   if (!j.is_object() || !j.contains("input") || !j["input"].is_string())
     throw ParseError(file, 0, "expected an object with \"input\" (the run's dataset), as hashfusion run writes");
   r.input = j["input"].get<std::string>();
-  if (!j.contains("camera") || !j["camera"].is_string())
-    throw ParseError(file, 0, "expected \"camera\": \"fx=.. fy=.. cx=.. cy=.. WxH\"");
-  const std::string cam = j["camera"].get<std::string>();
-  static const std::regex pattern(
-      R"(fx=(\S+) fy=(\S+) cx=(\S+) cy=(\S+) ([0-9]{1,5})x([0-9]{1,5}))");
-  std::smatch m;
-  if (cam.size() > 200 || !std::regex_match(cam, m, pattern))
-    throw ParseError(file, 0, "expected \"camera\": \"fx=.. fy=.. cx=.. cy=.. WxH\", got " + quote_for_message(cam));
-  r.camera.fx = parse_double(m.str(1), file, 0, "camera fx");
-  r.camera.fy = parse_double(m.str(2), file, 0, "camera fy");
-  r.camera.cx = parse_double(m.str(3), file, 0, "camera cx");
-  r.camera.cy = parse_double(m.str(4), file, 0, "camera cy");
-  r.camera.width = int(parse_integer(m.str(5), file, 0, "camera width", 1, 65536));
-  r.camera.height = int(parse_integer(m.str(6), file, 0, "camera height", 1, 65536));
-  if (!(r.camera.fx > 0) || !(r.camera.fy > 0)) throw ParseError(file, 0, "expected positive camera focal lengths");
+  // "camera": an object {fx, fy, cx, cy, width, height} (issue 36 on), else the string runs wrote before.
+  if (j.contains("camera") && j["camera"].is_object()) {
+    r.camera = PinholeCamera::parse(j["camera"].dump(), file);
+  } else {
+    if (!j.contains("camera") || !j["camera"].is_string())
+      throw ParseError(file, 0, "expected \"camera\": {\"fx\": .., \"fy\": .., \"cx\": .., \"cy\": .., \"width\": .., "
+                                "\"height\": ..} or \"fx=.. fy=.. cx=.. cy=.. WxH\"");
+    const std::string cam = j["camera"].get<std::string>();
+    static const std::regex pattern(
+        R"(fx=(\S+) fy=(\S+) cx=(\S+) cy=(\S+) ([0-9]{1,5})x([0-9]{1,5}))");
+    std::smatch m;
+    if (cam.size() > 200 || !std::regex_match(cam, m, pattern))
+      throw ParseError(file, 0, "expected \"camera\": \"fx=.. fy=.. cx=.. cy=.. WxH\", got " + quote_for_message(cam));
+    r.camera.fx = parse_double(m.str(1), file, 0, "camera fx");
+    r.camera.fy = parse_double(m.str(2), file, 0, "camera fy");
+    r.camera.cx = parse_double(m.str(3), file, 0, "camera cx");
+    r.camera.cy = parse_double(m.str(4), file, 0, "camera cy");
+    r.camera.width = int(parse_integer(m.str(5), file, 0, "camera width", 1, 65536));
+    r.camera.height = int(parse_integer(m.str(6), file, 0, "camera height", 1, 65536));
+    if (!(r.camera.fx > 0) || !(r.camera.fy > 0)) throw ParseError(file, 0, "expected positive camera focal lengths");
+  }
   if (!j.contains("per_frame") || !j["per_frame"].is_array())
     throw ParseError(file, 0, "expected \"per_frame\": [...] (the run's frames)");
   size_t k = 0;

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/number_text.h"
 #include "core/kernels/image_kernels.h"
 #include "fusion/mesh.h"
 #include "fusion/raycast_sampled.h"
@@ -429,11 +430,11 @@ void Pipeline::integrate(const RgbdFrame& frame, const SE3& T_world_cur, FrameRe
 // The frame is kept for re-fusion, anchored to the newest keyframe (itself when it just became one).
 void Pipeline::record_anchor(const FrameResult& r) {
   if (keyframes_.empty()) {
-    anchors_.push_back({std::string::npos, r.T_world_camera});
+    anchors_.push_back({std::string::npos, r.T_world_camera, r.timestamp_s});
     return;
   }
   const size_t k = keyframes_.size() - 1;
-  anchors_.push_back({k, keyframes_[k].T_world_camera.inverse() * r.T_world_camera});
+  anchors_.push_back({k, keyframes_[k].T_world_camera.inverse() * r.T_world_camera, r.timestamp_s});
 }
 
 std::vector<SE3> Pipeline::corrected_trajectory() const {
@@ -442,6 +443,28 @@ std::vector<SE3> Pipeline::corrected_trajectory() const {
   for (const Anchor& a : anchors_)
     out.push_back(a.keyframe == std::string::npos ? a.T_keyframe_frame
                                                   : keyframes_[a.keyframe].T_world_camera * a.T_keyframe_frame);
+  return out;
+}
+
+void Pipeline::load_map(fusion::VoxelBlockGrid grid, fusion::BlockStore store) {
+  if (frames_ > 0) throw Error("load_map: the pipeline has processed frames already; load a map before the first");
+  const fusion::VolumeParams& have = config_.volume;
+  const fusion::VolumeParams& got = grid.params();
+  if (got.voxel_m != have.voxel_m || got.truncation_vox != have.truncation_vox)
+    throw Error("load_map: the map has voxels of " + number_for_message(got.voxel_m) + " m and truncation " +
+                number_for_message(got.truncation_vox) + " voxels, the configuration " +
+                number_for_message(have.voxel_m) + " m and " + number_for_message(have.truncation_vox) +
+                " (set volume.voxel_m / truncation_vox to the map's)");
+  grid_ = std::move(grid);
+  store_ = std::move(store);
+  device_map_stale_ = true;  // a device map (backend opencl) loads it before the next integrate
+}
+
+Trajectory Pipeline::corrected_stamped_trajectory() const {
+  const std::vector<SE3> poses = corrected_trajectory();
+  Trajectory out;
+  out.reserve(poses.size());
+  for (size_t i = 0; i < poses.size(); ++i) out.push_back({anchors_[i].timestamp_s, poses[i]});
   return out;
 }
 

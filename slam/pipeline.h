@@ -97,6 +97,7 @@
 #include "fusion/voxel_block_grid.h"
 #include "io/frame_source.h"
 #include "io/mesh.h"
+#include "io/trajectory_io.h"
 #include "registration/frame_pyramid.h"
 #include "registration/registration.h"
 #include "slam/appearance.h"
@@ -194,8 +195,18 @@ class Pipeline {
   std::string tracking_registration() const { return registration_ ? registration_->name() : config_.registration; }
   const FusedFrames& fused_frames() const { return fused_; }  // the last kept frame joins it with the next
 
+  // Continues a session in a saved map (fusion/volume_io.h: `run --save-map`, Pipeline.save): before the first
+  // frame, the map replaces the empty one. The map holds the TSDF only (no keyframes, no trajectory), so nothing
+  // is relocalised against it: the first frame is placed as on an empty map, at its ground-truth pose where it has
+  // one, else at the map's origin (the first camera of the session that built it), and tracking goes on from
+  // there against the model raycast. hf::Error when frames were processed already or the map's voxel size or
+  // truncation differs from the configuration's (a TSDF cannot be resampled).
+  void load_map(fusion::VoxelBlockGrid grid, fusion::BlockStore store);
+
   // Every processed frame's pose after the loop closures so far, in processing order.
   std::vector<SE3> corrected_trajectory() const;
+  // The same with each frame's time stamp (processing order; the stamps are the frames' as given).
+  Trajectory corrected_stamped_trajectory() const;
   // After the last frame: applies the back-end's job in flight and runs one more for the keyframes it has not
   // seen, then re-fuses every queued frame (the backlog ends at 0); with `global`, first solves the keyframe graph
   // once more (a longer budget) and then fuses the map anew from every stored frame at its final pose. Returns
@@ -294,6 +305,7 @@ class Pipeline {
   struct Anchor {
     size_t keyframe;
     SE3 T_keyframe_frame;
+    double timestamp_s;  // the frame's, for corrected_stamped_trajectory()
   };
   std::vector<Anchor> anchors_;
   SE3 velocity_;          // T_prev_cur of the last accepted frame pair

@@ -10,6 +10,8 @@
 
 #include "core/bounded_read.h"
 #include "core/error.h"
+#include "core/number_text.h"
+#include "slam/config_reference.h"
 #include "slam/appearance.h"
 
 namespace hf::slam {
@@ -32,6 +34,8 @@ struct ToJson {
   void operator()(const char* key, T& value) {
     if constexpr (std::is_same_v<T, RobustKernel>) {
       (*j)[key] = robust_name(value);
+    } else if constexpr (std::is_same_v<T, float>) {
+      (*j)[key] = float_as_shortest_double(value);  // 0.1, not 0.10000000149011612
     } else {
       (*j)[key] = value;
     }
@@ -42,6 +46,17 @@ struct FromJson {
   const nlohmann::json* j;
   std::string where;  // "config.json: registration_options"
   size_t used = 0;
+  // "" (top level) or the section ("volume"): numbers are checked against the row "section.key" of the reference
+  // (slam/config_reference.h). registration_options' ranges are each method's validate()'s to enforce.
+  std::string section;
+
+  // The reference's range for `key`, where it has a row.
+  void check_range(const char* key, double v, const std::string& name) const {
+    if (section == "registration_options") return;
+    const ConfigKey* row = find_config_key(section.empty() ? std::string(key) : section + "." + key);
+    if (row && !in_config_range(*row, v))
+      throw Error(name + ": expected " + describe_range(*row) + ", got " + number_for_message(v));
+  }
   template <class T>
   void operator()(const char* key, T& value) {
     auto it = j->find(key);
@@ -88,11 +103,13 @@ struct FromJson {
       if (!ok) throw Error(name + ": expected an integer in [" + std::to_string(std::numeric_limits<T>::min()) + ", " +
                            std::to_string(std::numeric_limits<T>::max()) + "]");
       value = it->get<T>();
+      check_range(key, double(value), name);
     } else {
       if (!it->is_number()) throw Error(name + ": expected a number");
       const double v = it->get<double>();
       if (!std::isfinite(v) || std::abs(v) > double(std::numeric_limits<T>::max()))
         throw Error(name + ": number out of range");
+      check_range(key, v, name);
       value = static_cast<T>(v);
     }
   }
@@ -222,7 +239,10 @@ nlohmann::json section_to_json(S& s) {
 template <class S>
 void section_from_json(const nlohmann::json& j, const std::string& where, S& s) {
   if (!j.is_object()) throw Error(where + ": expected an object");
-  FromJson f{&j, where};
+  FromJson f{&j, where, 0, ""};
+  // "x.json: volume" -> "volume": the section's rows in the reference.
+  const size_t colon = where.rfind(": ");
+  f.section = colon == std::string::npos ? where : where.substr(colon + 2);
   visit(f, s);
   // Unknown keys are mistakes (a typo would otherwise silently keep the default).
   nlohmann::json known = section_to_json(s);
@@ -257,6 +277,14 @@ RegistrationOptions pipeline_registration_options(const std::string& method) {
   RegistrationOptions o = default_registration_options(method);
   o.set("rgb_weight", kPipelineRgbWeight);  // methods without photometric rows have no such knob
   return o;
+}
+
+RegistrationOptions registration_options_from_json(const std::string& method, const nlohmann::json& j,
+                                                   const std::string& where) {
+  RegistrationOptions r = default_registration_options(method);
+  section_from_json(j, where, r);  // keys typed now: no migration of former spellings
+  r.validate();
+  return r;
 }
 
 RegistrationOptions effective_registration_options(const PipelineConfig& c) {
@@ -356,7 +384,7 @@ namespace {
 PipelineConfig pipeline_config_from_json_unnamed(const nlohmann::json& j, const std::string& where) {
   if (!j.is_object()) throw Error(where + ": expected a JSON object");
   PipelineConfig c;
-  FromJson f{&j, where};
+  FromJson f{&j, where, 0, ""};
   visit_scalars(f, c);
   // The method first: the registration options start from its defaults.
   static const char* sections[] = {"volume", "integrate", "raycast", "pyramid", "registration_options",
@@ -439,6 +467,9 @@ PipelineConfig parse_config(const std::string& text, const std::string& path) {
   } catch (const nlohmann::json::exception& e) {
     throw Error(path + ": invalid JSON (" + e.what() + ")");  // e.g. a number out of double range
   }
+  // A whole report.json (its "config" object repeats the run): no configuration has a key "config".
+  if (j.is_object() && j.contains("config") && j["config"].is_object())
+    return config_from_json(j["config"], path + ": config");
   return config_from_json(j, path);
 }
 

@@ -108,7 +108,8 @@ struct PipelineConfig {
 // (e.g. the config file) and the key.
 nlohmann::json config_to_json(const PipelineConfig& config);
 PipelineConfig config_from_json(const nlohmann::json& j, const std::string& where);
-// Reads a JSON config file; errors name the file (and line for JSON syntax errors).
+// Reads a JSON config file, or a report.json whose "config" object it takes; errors name the file (and line for
+// JSON syntax errors).
 PipelineConfig load_config(const std::string& path);
 // The same from the file's text; `name` stands for the file in messages.
 PipelineConfig parse_config(const std::string& text, const std::string& name);
@@ -123,6 +124,11 @@ inline constexpr double kPipelineRgbWeight = 0.4;
 
 // A method's options as the pipeline runs it: its defaults, with rgb_weight = kPipelineRgbWeight where it has one.
 RegistrationOptions pipeline_registration_options(const std::string& method);
+// A registry method's options from a JSON object of its keys (as report.json's "registration_options"): the
+// method's registry defaults (default_registration_options, not the pipeline's) overridden by the keys present,
+// validated. hf::Error naming `where` and the key for an unknown key, a wrong type or a value out of range.
+RegistrationOptions registration_options_from_json(const std::string& method, const nlohmann::json& j,
+                                                   const std::string& where);
 // The registration options in force: registration_options when set, else pipeline_registration_options().
 RegistrationOptions effective_registration_options(const PipelineConfig& config);
 

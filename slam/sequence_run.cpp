@@ -17,6 +17,7 @@
 #include "core/progress.h"
 #include "fusion/voxel_block_grid.h"
 #include "io/image_io.h"
+#include "fusion/volume_io.h"
 #include "io/ply.h"
 #include "slam/eval_plot.h"
 
@@ -272,9 +273,15 @@ RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const Fra
 nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, const Pipeline& pipeline,
                                const FrameSource& source) {
   nlohmann::json j;
+  auto text_or_null = [](const std::string& t) { return t.empty() ? nlohmann::json(nullptr) : nlohmann::json(t); };
+  j["version"] = text_or_null(s.version);
+  j["commit"] = text_or_null(s.commit);
+  j["command_line"] = text_or_null(s.command_line);
+  j["started_utc"] = text_or_null(s.started_utc);
   j["input"] = s.input;
   j["source"] = s.source_name;
-  j["camera"] = source.camera().describe();
+  const PinholeCamera& c = source.camera();
+  j["camera"] = {{"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy}, {"width", c.width}, {"height", c.height}};
   j["camera_origin"] = source.camera_origin();
   j["registration"] = s.registration;
   j["backend"] = s.backend;
@@ -456,13 +463,23 @@ std::string report_markdown(const RunSummary& s, const SequenceRun& run, const F
 }  // namespace
 
 const std::vector<std::string>& run_output_names() {
-  static const std::vector<std::string> names = {"trajectory.txt", "mesh.ply",    "report.json",
-                                                 "report.md",      "render.png", "trajectory.png"};
+  static const std::vector<std::string> names = {"trajectory.txt", "mesh.ply",  "report.json", "report.md",
+                                                 "render.png",     "trajectory.png", "map.hfmap", "cloud.ply",
+                                                 "cloud.pcd"};
   return names;
 }
 
+PointCloud surface_cloud(const TriangleMesh& mesh) {
+  PointCloud cloud;
+  cloud.positions = mesh.vertices;
+  cloud.normals = mesh.normals;
+  cloud.colors = mesh.colors;
+  return cloud;
+}
+
 std::vector<std::string> write_run_outputs(const std::string& dir, const SequenceRun& run, const RunSummary& summary,
-                                           const Pipeline& pipeline, const FrameSource& source) {
+                                           const Pipeline& pipeline, const FrameSource& source,
+                                           const RunOutputOptions& extra) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec || !std::filesystem::is_directory(dir)) throw Error(dir + ": cannot create output folder");
@@ -473,8 +490,13 @@ std::vector<std::string> write_run_outputs(const std::string& dir, const Sequenc
   std::vector<std::string> names = {"trajectory.txt", "mesh.ply", "report.json", "report.md"};
   if (!shaded.empty()) names.push_back("render.png");
   if (eval) names.push_back("trajectory.png");
+  auto path_of = [&](const std::string& name) {
+    return std::filesystem::path(name).is_absolute() ? name : dir + "/" + name;
+  };
+  // Extra outputs named by a bare file name land in the folder and belong to its set.
+  for (const std::string* extra_name : {&extra.map, &extra.cloud})
+    if (!extra_name->empty() && std::filesystem::path(*extra_name).parent_path().empty()) names.push_back(*extra_name);
   std::vector<std::string> written;
-  auto path_of = [&](const std::string& name) { return dir + "/" + name; };
 
   write_tum_trajectory(path_of("trajectory.txt"), run.estimate(),
                        "hashfusion run --registration " + summary.registration + "\ninput: " + summary.input);
@@ -482,8 +504,18 @@ std::vector<std::string> write_run_outputs(const std::string& dir, const Sequenc
 
   PlyWriteOptions ply;
   ply.comment = "hashfusion " + summary.registration + " on " + summary.input;
-  write_ply(path_of("mesh.ply"), pipeline.extract_mesh(), ply);
+  const TriangleMesh mesh = pipeline.extract_mesh();
+  write_ply(path_of("mesh.ply"), mesh, ply);
   written.push_back(path_of("mesh.ply"));
+  if (!extra.map.empty()) {
+    fusion::save_volume(path_of(extra.map), pipeline.map(), &pipeline.store());
+    written.push_back(path_of(extra.map));
+  }
+  if (!extra.cloud.empty()) {
+    if (!extra.write_cloud) throw Error("write_run_outputs: a cloud without a writer");
+    extra.write_cloud(path_of(extra.cloud), surface_cloud(mesh));
+    written.push_back(path_of(extra.cloud));
+  }
 
   nlohmann::json j = summary_to_json(summary, run, pipeline, source);
   j["outputs"] = names;

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "io/frame_source.h"
+#include "io/mesh.h"
 #include "io/trajectory_io.h"
 #include "slam/eval.h"
 #include "slam/pipeline.h"
@@ -74,6 +75,11 @@ SequenceRun run_sequence(FrameSource& source, Pipeline& pipeline, const RunContr
 
 // What a run is judged by. Trajectory errors are empty without ground truth or with fewer than kMinAtePairs poses.
 struct RunSummary {
+  // Provenance, set by the caller after summarize() (the CLI: apps/build_info.h, its argv, when it started);
+  // report.json writes an empty one as null.
+  std::string version, commit;  // of the program that ran
+  std::string command_line;     // as typed, each argument shell-quoted where it needs it
+  std::string started_utc;      // ISO 8601, "2026-12-06T22:37:36Z"
   std::string input;            // as given by the user (path or synthetic:PRESET)
   std::string source_name;      // FrameSource::name()
   std::string registration, backend;
@@ -125,7 +131,9 @@ struct RunSummary {
 RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const FrameSource& source,
                      const std::string& input);
 
-// report.json: the fields of RunSummary (null where absent), "stopped_by" (SequenceRun::stopped_by, null when the
+// report.json (every field: docs/report.md): the fields of RunSummary (null where absent), "camera" as an object
+// {fx, fy, cx, cy, width, height} (before issue 36 a string, PinholeCamera::describe(), which readers still
+// accept), "stopped_by" (SequenceRun::stopped_by, null when the
 // loop ran to its end or was interrupted), "input_ended" and "capture" (live sources; null otherwise), "ms_per_frame" {read, preprocess, track, integrate, raycast, total},
 // "config" (config_to_json), per-frame states, and the camera; write_run_outputs adds "outputs".
 nlohmann::json summary_to_json(const RunSummary& summary, const SequenceRun& run, const Pipeline& pipeline,
@@ -136,10 +144,27 @@ nlohmann::json summary_to_json(const RunSummary& summary, const SequenceRun& run
 // truth). report.json's "outputs" lists the file names of this set; a file of ours (run_output_names()) that this
 // run does not write, left by an earlier run into the same folder, is removed. Returns the paths written, in
 // that order.
-// Every file name write_run_outputs may write.
+// Every file name write_run_outputs may write into its folder (map.hfmap, cloud.ply and cloud.pcd with
+// RunOutputOptions naming them there).
 const std::vector<std::string>& run_output_names();
 
+// What a run writes besides the fixed set (`run --save-map`, `--save-cloud`): each a path, absolute or relative to
+// the output folder; "" = not written. The map is fusion/volume_io.h's format (the TSDF's resident and streamed-out
+// blocks; no keyframes, no trajectory); the cloud is the extracted surface's vertices with colour and normals, PLY
+// or PCD by the extension.
+struct RunOutputOptions {
+  std::string map;    // e.g. "map.hfmap"
+  std::string cloud;  // e.g. "cloud.ply" / "cloud.pcd"
+  // Writes `cloud` (PLY or PCD by its extension, atomically): the caller's, since PCD goes through PCL
+  // (io/pcd.h, hf_io_pcl), which hf_slam does not link. Required with `cloud`.
+  std::function<void(const std::string& path, const PointCloud& cloud)> write_cloud;
+};
+
 std::vector<std::string> write_run_outputs(const std::string& dir, const SequenceRun& run, const RunSummary& summary,
-                                           const Pipeline& pipeline, const FrameSource& source);
+                                           const Pipeline& pipeline, const FrameSource& source,
+                                           const RunOutputOptions& extra = {});
+
+// The surface as a point cloud: the mesh's vertices with their colours and normals.
+PointCloud surface_cloud(const TriangleMesh& mesh);
 
 }  // namespace hf::slam

@@ -20,13 +20,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// "fx=525 fy=525 cx=319.5 cy=239.5 640x480" (PinholeCamera::describe, as report.json stores it).
+// report.json's "camera": an object {fx, fy, cx, cy, width, height} (issue 36 on), or the string
+// "fx=525 fy=525 cx=319.5 cy=239.5 640x480" (PinholeCamera::describe) that earlier runs wrote.
 std::optional<PinholeCamera> camera_from_report(const std::string& dir) {
   const fs::path report = fs::path(dir) / "report.json";
   std::error_code ec;
   if (!fs::is_regular_file(report, ec)) return std::nullopt;
   try {
     const nlohmann::json j = nlohmann::json::parse(read_regular_file(report.string(), "run report", 1 << 26));
+    if (j.at("camera").is_object()) return PinholeCamera::parse(j["camera"].dump(), report.string());
     PinholeCamera c;
     if (std::sscanf(j.at("camera").get<std::string>().c_str(), "fx=%lf fy=%lf cx=%lf cy=%lf %dx%d", &c.fx, &c.fy,
                     &c.cx, &c.cy, &c.width, &c.height) == 6)

@@ -9,8 +9,45 @@
 
 Conventions (as in the C++ library): poses are 4x4 float64 arrays named by their frames (T_world_camera maps
 camera points into the world), metres everywhere, trajectories are (stamps (N,), poses (N, 4, 4)) pairs or TUM
-file paths, configurations are dicts with the keys of report.json's "config". C++ errors arrive as
-hashfusion.Error (ParseError, CapacityError) with the C++ message, bad arguments as ValueError.
+file paths, configurations are dicts with the keys of report.json's "config". Depth goes in as float32 metres or
+as uint16 with depth_scale (units per metre, Open3D's convention: 1000 for millimetres, 5000 for TUM). C++ errors
+arrive as hashfusion.Error (ParseError, CapacityError) with the C++ message, bad arguments as ValueError, a
+missing file or folder as FileNotFoundError.
 """
 from ._hashfusion import *  # noqa: F401,F403
-from ._hashfusion import Error, ParseError, CapacityError, __version__  # noqa: F401
+from ._hashfusion import Dataset, Error, ParseError, CapacityError, __version__  # noqa: F401
+
+
+class DatasetView:
+    """A lazy slice of a Dataset (data[a:b:s]): frames are read when indexed or iterated, not when sliced."""
+
+    def __init__(self, dataset, indices):
+        self._dataset = dataset
+        self._indices = indices
+
+    def __len__(self):
+        return len(self._indices)
+
+    def __getitem__(self, key):
+        picked = self._indices[key]
+        if isinstance(key, slice):
+            return DatasetView(self._dataset, picked)
+        return self._dataset._frame_at(picked)
+
+    def __iter__(self):
+        for i in self._indices:
+            yield self._dataset._frame_at(i)
+
+    def __repr__(self):
+        return "hashfusion.DatasetView(%d frames of %s)" % (len(self), self._dataset.name)
+
+    camera = property(lambda self: self._dataset.camera)
+
+
+def _dataset_getitem(self, key):
+    if isinstance(key, slice):
+        return DatasetView(self, range(len(self))[key])
+    return self._frame_at(key)
+
+
+Dataset.__getitem__ = _dataset_getitem

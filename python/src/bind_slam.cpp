@@ -11,15 +11,19 @@
 #include <pybind11/stl.h>
 
 #include <atomic>
+#include <cmath>
 #include <mutex>
 #include <optional>
+#include <sstream>
 
 #include "core/error.h"
 #include "datasets/synthetic_source.h"
+#include "fusion/volume_io.h"
 #include "io/dataset.h"
 #include "python/src/bindings.h"
 #include "python/src/convert.h"
 #include "registration/frame_pyramid.h"
+#include "registration/reduction.h"
 #include "registration/registration.h"
 #include "slam/eval.h"
 #include "slam/pipeline.h"
@@ -46,8 +50,30 @@ struct Dataset {
 
 struct Pipeline {
   std::unique_ptr<slam::Pipeline> pipeline;
+  std::optional<double> last_timestamp_s;  // of the last frame processed, for the check the CLI's readers make
   std::mutex mutex;
 };
+
+// Time stamps as a TUM list file must have them (io/tum_dataset.h): finite; and not before the previous frame's,
+// since the motion-plausibility check divides by the time between frames.
+void check_timestamp(const Pipeline& p, double timestamp_s) {
+  if (!std::isfinite(timestamp_s))
+    throw ValueError("timestamp: expected a finite time in seconds, got " + std::to_string(timestamp_s));
+  if (p.last_timestamp_s && timestamp_s < *p.last_timestamp_s) {
+    std::ostringstream s;
+    s.precision(17);
+    s << "timestamp " << timestamp_s << " s is before the previous frame's " << *p.last_timestamp_s
+      << " s: time stamps may not decrease";
+    throw ValueError(s.str());
+  }
+}
+
+slam::FrameResult process_checked(Pipeline& p, const RgbdFrame& frame) {
+  check_timestamp(p, frame.timestamp_s);
+  slam::FrameResult r = unlocked(p.mutex, [&] { return p.pipeline->process(frame); });
+  p.last_timestamp_s = frame.timestamp_s;
+  return r;
+}
 
 struct Registration {
   std::unique_ptr<hf::Registration> registration;
@@ -66,6 +92,7 @@ PinholeCamera camera_argument(const py::object& camera) {
 
 std::unique_ptr<Dataset> open(const std::string& path, const py::object& camera, int frames, std::uint64_t seed,
                               size_t prefetch_frames) {
+  if (!datasets::is_synthetic_input(path)) require_existing_path(path, "open_dataset");
   auto d = std::make_unique<Dataset>();
   d->input = path;
   py::gil_scoped_release nogil;
@@ -146,6 +173,8 @@ RunResult run(Pipeline& p, Dataset& d, long max_frames, bool global, const py::o
     result.report = slam::summary_to_json(summary, result.run, *p.pipeline, *d.source);
   }
   for (const auto& b : result.run.bad_frames) d.bad_frames.push_back(b);
+  const Trajectory online = result.run.online_estimate();
+  if (!online.empty()) p.last_timestamp_s = online.back().timestamp_s;
   if (error) throw *error;
   return result;
 }
@@ -175,11 +204,36 @@ py::dict rpe_dict(const RpeResult& rpe, const nlohmann::json& metrics) {
   return d;
 }
 
+// Frame `index` out of order (negative counts from the end, as Python's); IndexError outside, hf.Error for an
+// unreadable frame. Does not move the iteration.
+RgbdFrame frame_at(const Dataset& d, long index) {
+  const size_t n = d.source->size();
+  if (n == kUnknownFrameCount) throw py::type_error("a live source cannot be indexed");
+  const long i = index < 0 ? index + long(n) : index;
+  if (i < 0 || size_t(i) >= n)
+    throw py::index_error("frame " + std::to_string(index) + " out of range (" + std::to_string(n) + " frames)");
+  std::optional<FrameRead> r;
+  {
+    py::gil_scoped_release nogil;
+    r = d.source->read_at(size_t(i));
+  }
+  if (!r) throw py::type_error("this source cannot be indexed");
+  if (r->status != FrameStatus::ok) throw Error(r->message);
+  return std::move(r->frame);
+}
+
 void bind_dataset(py::module_& m) {
-  py::class_<Dataset>(m, "Dataset", "Frames of a dataset folder (TUM RGB-D, 7-Scenes) or synthetic:PRESET")
+  py::class_<Dataset>(m, "Dataset",
+                      "Frames of a dataset folder (TUM RGB-D, 7-Scenes) or synthetic:PRESET: iterate it, or index "
+                      "it (data[i], data[a:b:s] a lazy view, len(data)); indexing does not move the iteration")
       .def("__iter__", [](py::object self) { return self; })
       .def("__next__", &next_frame)
-      .def("__len__", [](const Dataset& d) { return d.source->size(); })
+      .def("__len__",
+           [](const Dataset& d) {
+             if (d.source->size() == kUnknownFrameCount) throw py::type_error("a live source has no length");
+             return d.source->size();
+           })
+      .def("_frame_at", &frame_at, py::arg("index"), "frame `index` (the Python side implements data[i])")
       .def_property_readonly("camera", [](const Dataset& d) { return d.source->camera(); })
       .def_property_readonly("camera_origin", [](const Dataset& d) { return d.source->camera_origin(); })
       .def_property_readonly("name", [](const Dataset& d) { return d.source->name(); })
@@ -244,20 +298,19 @@ void bind_pipeline(py::module_& m) {
              return p;
            }),
            py::arg("config") = py::none(), py::arg("camera") = PinholeCamera{})
-      .def("process",
-           [](Pipeline& p, const RgbdFrame& frame) {
-             return unlocked(p.mutex, [&] { return p.pipeline->process(frame); });
-           },
-           py::arg("frame"))
+      .def("process", &process_checked, py::arg("frame"),
+           "a Frame; its timestamp must be finite and not before the previous frame's (ValueError)")
       .def("process",
            [](Pipeline& p, const py::object& depth, const py::object& color, double timestamp,
-              const py::object& T_world_camera_gt) {
+              const py::object& T_world_camera_gt, const py::object& depth_scale) {
              const RgbdFrame f = frame_from_arrays(depth, color, timestamp, T_world_camera_gt,
-                                                   p.pipeline->frames_processed());
-             return unlocked(p.mutex, [&] { return p.pipeline->process(f); });
+                                                   p.pipeline->frames_processed(), depth_scale);
+             return process_checked(p, f);
            },
            py::arg("depth"), py::arg("color"), py::arg("timestamp"), py::arg("T_world_camera_gt") = py::none(),
-           "depth float32 (H, W) metres, color uint8 (H, W, 3), timestamp seconds")
+           py::arg("depth_scale") = py::none(),
+           "depth float32 (H, W) metres or uint16 with depth_scale units per metre, color uint8 (H, W, 3), "
+           "timestamp seconds (finite, not before the previous frame's)")
       .def("run", &run, py::arg("dataset"), py::arg("max_frames") = 0, py::arg("global_solve") = false,
            py::arg("callback") = py::none(),
            "the whole dataset as `hashfusion run` does it; callback(FrameResult) after each frame. Ctrl-C, or an "
@@ -265,6 +318,24 @@ void bind_pipeline(py::module_& m) {
       .def("finish",
            [](Pipeline& p, bool global) { return unlocked(p.mutex, [&] { return p.pipeline->finish(global); }); },
            py::arg("global_solve") = false, "after the last frame: drain the re-fusion queue; returns ms")
+      .def("save",
+           [](Pipeline& p, const std::string& path) {
+             unlocked(p.mutex, [&] { fusion::save_volume(path, p.pipeline->map(), &p.pipeline->store()); });
+           },
+           py::arg("path"),
+           "writes the map (the TSDF volume, resident and streamed-out blocks; no keyframes) atomically, in "
+           "the format of `hashfusion run --save-map`")
+      .def("load",
+           [](Pipeline& p, const std::string& path) {
+             require_existing_path(path, "Pipeline.load");
+             unlocked(p.mutex, [&] {
+               fusion::Volume v = fusion::load_volume(path);
+               p.pipeline->load_map(std::move(v.grid), std::move(v.store));
+             });
+           },
+           py::arg("path"),
+           "before the first frame: continue in a saved map (`run --load-map`): the first frame is placed at its "
+           "ground-truth pose, else at the map's origin; the configuration's voxel size must be the map's")
       .def("extract_mesh",
            [](Pipeline& p) { return unlocked(p.mutex, [&] { return p.pipeline->extract_mesh(); }); })
       .def("render",
@@ -276,16 +347,11 @@ void bind_pipeline(py::module_& m) {
            py::arg("T_world_camera"), "shaded raycast of the model, uint8 (H, W, 3)")
       .def("corrected_trajectory",
            [](Pipeline& p) {
-             const std::vector<SE3> poses = unlocked(p.mutex, [&] { return p.pipeline->corrected_trajectory(); });
-             py::array_t<double> a({py::ssize_t(poses.size()), py::ssize_t(4), py::ssize_t(4)});
-             auto v = a.mutable_unchecked<3>();
-             for (size_t i = 0; i < poses.size(); ++i) {
-               const Eigen::Matrix4d T = poses[i].matrix();
-               for (int r = 0; r < 4; ++r)
-                 for (int c = 0; c < 4; ++c) v(py::ssize_t(i), r, c) = T(r, c);
-             }
-             return a;
-           })
+             const Trajectory t = unlocked(p.mutex, [&] { return p.pipeline->corrected_stamped_trajectory(); });
+             return trajectory_to_python(t);
+           },
+           "(stamps (N,), poses (N, 4, 4)): every processed frame's pose after the loop closures so far, with its "
+           "time stamp, as hf.ate / hf.evaluate take it")
       .def_property_readonly("config", [](Pipeline& p) { return json_to_python(slam::config_to_json(p.pipeline->config())); })
       .def_property_readonly("camera", [](Pipeline& p) { return p.pipeline->camera(); })
       .def_property_readonly("frames_processed", [](Pipeline& p) { return p.pipeline->frames_processed(); })
@@ -312,12 +378,32 @@ void bind_registration(py::module_& m) {
            py::arg("current"), py::arg("reference"), py::arg("camera"), py::arg("T_ref_cur_initial") = py::none(),
            py::arg("levels") = 3, "T_ref_cur maps current-camera points into the reference camera");
   m.def("make_registration",
-        [](const std::string& name, const std::string& backend) {
+        [](const std::string& name, const py::object& options, const std::string& backend) {
           auto r = std::make_unique<Registration>();
-          r->registration = make_registration(name, backend);
+          if (options.is_none()) {
+            r->registration = make_registration(name, backend);
+          } else {
+            const nlohmann::json j = json_from_python(options, "options");
+            if (!j.is_object()) throw ValueError("options: expected a dict of the method's option keys");
+            const RegistrationOptions o = slam::registration_options_from_json(name, j, "options");
+            r->registration = make_registration(name, o, make_backend(backend));
+          }
           return r;
         },
-        py::arg("name"), py::arg("backend") = "cpu");
+        py::arg("name"), py::arg("options") = py::none(), py::arg("backend") = "cpu",
+        "a registry method; options: a dict of its keys (report.json's \"registration_options\" for that "
+        "method) over the method's defaults; unknown keys and bad values raise hf.Error naming them");
+  m.def("registration_options",
+        [](const std::string& name) {
+          RegistrationOptions o = default_registration_options(name);
+          return json_to_python(slam::config_to_json([&] {
+                                  slam::PipelineConfig c;
+                                  c.registration = name;
+                                  c.registration_options = o;
+                                  return c;
+                                }())["registration_options"]);
+        },
+        py::arg("name"), "a method's default options as the dict make_registration(name, options=) takes");
   m.def("registration_names", &registration_names);
 }
 

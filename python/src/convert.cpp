@@ -1,8 +1,14 @@
 #include "python/src/convert.h"
 
+#include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
+#include <sstream>
+#include <system_error>
+#include <vector>
 
 #include "io/trajectory_io.h"
 
@@ -84,20 +90,84 @@ py::array_t<double> se3_to_array(const SE3& T) {
   return a;
 }
 
-DepthImage depth_from_array(const py::handle& array, const char* what) {
-  auto a = as_array<float>(array, what, "a float32 (H, W) depth array in metres");
-  if (a.ndim() != 2) throw ValueError(std::string(what) + ": expected shape (H, W), got " + shape_of(a));
-  check_image_size(a, what);
-  DepthImage depth(int(a.shape(1)), int(a.shape(0)));
-  const float* src = a.data();
-  for (size_t i = 0; i < depth.size(); ++i) {
-    if (!std::isfinite(src[i]) || src[i] < 0.0f)
-      throw ValueError(std::string(what) + ": pixel (" + std::to_string(i % depth.width()) + ", " +
-                       std::to_string(i / depth.width()) + ") is " + std::to_string(src[i]) +
-                       "; depth is metres >= 0, with 0 for no measurement");
-    depth.data()[i] = src[i];
+namespace {
+
+constexpr const char* kDepthExpected =
+    "expected float32 metres, or uint16 with depth_scale (units per metre: 1000 for millimetres as Open3D reads "
+    "PNGs, 5000 for TUM RGB-D)";
+
+// The median of the measured (> 0) pixels, 0 when there are none.
+float depth_median_m(const DepthImage& depth) {
+  std::vector<float> valid;
+  valid.reserve(depth.size());
+  for (size_t i = 0; i < depth.size(); ++i)
+    if (depth.data()[i] > 0.0f) valid.push_back(depth.data()[i]);
+  if (valid.empty()) return 0.0f;
+  auto mid = valid.begin() + long(valid.size() / 2);
+  std::nth_element(valid.begin(), mid, valid.end());
+  return *mid;
+}
+
+std::string depth_number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+DepthImage depth_from_array(const py::handle& array, const char* what, const py::handle& depth_scale) {
+  py::array any = py::array::ensure(array);
+  if (!any) throw ValueError(std::string(what) + ": " + kDepthExpected + ", got " + str(array));
+  const bool is_float = any.dtype().is(py::dtype::of<float>());
+  const bool is_u16 = any.dtype().is(py::dtype::of<std::uint16_t>());
+  if (!is_float && !is_u16)
+    throw ValueError(std::string(what) + ": " + kDepthExpected + ", got a " + std::string(py::str(any.dtype())) +
+                     " array of shape " + shape_of(any));
+  if (any.ndim() != 2) throw ValueError(std::string(what) + ": expected shape (H, W), got " + shape_of(any));
+  check_image_size(any, what);
+  DepthImage depth(int(any.shape(1)), int(any.shape(0)));
+  if (is_float) {
+    if (!depth_scale.is_none())
+      throw ValueError(std::string(what) + ": depth_scale applies to uint16 depth; float32 depth is metres already");
+    auto a = as_array<float>(any, what, kDepthExpected);
+    const float* src = a.data();
+    for (size_t i = 0; i < depth.size(); ++i) {
+      if (!std::isfinite(src[i]) || src[i] < 0.0f)
+        throw ValueError(std::string(what) + ": pixel (" + std::to_string(i % depth.width()) + ", " +
+                         std::to_string(i / depth.width()) + ") is " + std::to_string(src[i]) +
+                         "; depth is metres >= 0, with 0 for no measurement");
+      depth.data()[i] = src[i];
+    }
+  } else {
+    if (depth_scale.is_none())
+      throw ValueError(std::string(what) + ": uint16 depth of shape " + shape_of(any) +
+                       " needs depth_scale, its units per metre (1000 for millimetres as Open3D reads PNGs, 5000 "
+                       "for TUM RGB-D); it is not guessed");
+    const double scale = py::float_(py::reinterpret_borrow<py::object>(depth_scale)).cast<double>();
+    if (!std::isfinite(scale) || scale <= 0.0)
+      throw ValueError(std::string(what) + ": depth_scale must be a finite number > 0 (units per metre), got " +
+                       depth_number(scale));
+    auto a = as_array<std::uint16_t>(any, what, kDepthExpected);
+    const std::uint16_t* src = a.data();
+    for (size_t i = 0; i < depth.size(); ++i) depth.data()[i] = float(double(src[i]) / scale);
   }
+  const float median = depth_median_m(depth);
+  if (median > kMaxPlausibleMedianDepthM)
+    throw ValueError(std::string(what) + ": median depth " + depth_number(median) + " m is beyond " +
+                     depth_number(kMaxPlausibleMedianDepthM) +
+                     " m, implausible for an RGB-D sensor: are the values millimetres or TUM units? Pass them as "
+                     "uint16 with depth_scale=1000 (millimetres) or 5000 (TUM), or divide to metres first");
   return depth;
+}
+
+void require_existing_path(const std::string& path, const char* what) {
+  std::error_code ec;
+  if (std::filesystem::exists(std::filesystem::path(path), ec) || ec) return;  // errors other than "absent": C++'s
+  py::object error = py::module_::import("builtins")
+                         .attr("FileNotFoundError")(ENOENT, std::string(what) + ": no such file or folder", path);
+  PyErr_SetObject(reinterpret_cast<PyObject*>(Py_TYPE(error.ptr())), error.ptr());
+  throw py::error_already_set();
 }
 
 ColorImage color_from_array(const py::handle& array, const char* what) {
@@ -139,19 +209,24 @@ py::array_t<std::uint8_t> color_view(const ColorImage& color, const py::handle& 
 }
 
 RgbdFrame frame_from_arrays(const py::handle& depth, const py::handle& color, double timestamp,
-                            const py::handle& T_world_camera_gt, size_t index) {
+                            const py::handle& T_world_camera_gt, size_t index, const py::handle& depth_scale) {
+  if (!std::isfinite(timestamp))
+    throw ValueError("timestamp: expected a finite time in seconds, got " + depth_number(timestamp));
   RgbdFrame f;
   f.index = index;
   f.timestamp_s = timestamp;
-  f.depth = depth_from_array(depth, "depth");
+  f.depth = depth_from_array(depth, "depth", depth_scale);
   f.color = color_from_array(color, "color");
   if (!T_world_camera_gt.is_none()) f.T_world_camera_gt = se3_from_array(T_world_camera_gt, "T_world_camera_gt");
   return f;
 }
 
 Trajectory trajectory_from_python(const py::handle& value, const char* what) {
-  if (py::isinstance<py::str>(value) || py::hasattr(value, "__fspath__"))
-    return read_tum_trajectory(py::str(py::module_::import("os").attr("fspath")(value)));
+  if (py::isinstance<py::str>(value) || py::hasattr(value, "__fspath__")) {
+    const std::string path = py::str(py::module_::import("os").attr("fspath")(value));
+    require_existing_path(path, what);
+    return read_tum_trajectory(path);
+  }
   if (!py::isinstance<py::sequence>(value) || py::len(value) != 2)
     throw ValueError(std::string(what) + ": expected a TUM trajectory path or a (stamps, poses) pair, got " +
                      str(value));

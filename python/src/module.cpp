@@ -12,10 +12,12 @@
 #include <cstring>
 
 #include "core/camera.h"
+#include "core/camera_bounds.h"
 #include "core/error.h"
 #include "fusion/voxel_block_grid.h"
 #include "io/frame_source.h"
 #include "io/mesh.h"
+#include "io/mesh_file.h"
 #include "io/ply.h"
 #include "python/src/bindings.h"
 #include "python/src/convert.h"
@@ -42,25 +44,57 @@ void bind_errors(py::module_& m) {
   });
 }
 
+// The bounds a camera file is held to (core/camera_bounds.h), at the call: Camera(fx=nan) or fx=-525 would
+// otherwise construct and fail frames later naming a derived camera.
+PinholeCamera checked_camera(const PinholeCamera& c) {
+  if (c.width < 1 || c.height < 1 || c.width > 16384 || c.height > 16384)
+    throw ValueError("Camera: width and height must be within 1..16384, got " + std::to_string(c.width) + "x" +
+                     std::to_string(c.height));
+  try {
+    check_camera_intrinsics(c, "Camera");
+  } catch (const ParseError& e) {
+    throw ValueError(e.what());
+  }
+  return c;
+}
+
+// A read-write attribute whose new value is checked with the whole camera (the old value kept on error).
+template <class T>
+void camera_field(py::class_<PinholeCamera>& cls, const char* name, T PinholeCamera::*field) {
+  cls.def_property(
+      name, [field](const PinholeCamera& c) { return c.*field; },
+      [field](PinholeCamera& c, T value) {
+        PinholeCamera changed = c;
+        changed.*field = value;
+        c = checked_camera(changed);
+      });
+}
+
 void bind_camera(py::module_& m) {
-  py::class_<PinholeCamera>(m, "Camera", "Pinhole camera (pixels: x right, y down, centres at integers; metres)")
-      .def(py::init([](double fx, double fy, double cx, double cy, int width, int height) {
-             if (width < 1 || height < 1) throw ValueError("Camera: width and height must be >= 1");
-             return PinholeCamera{fx, fy, cx, cy, width, height};
-           }),
-           py::arg("fx") = 525.0, py::arg("fy") = 525.0, py::arg("cx") = 319.5, py::arg("cy") = 239.5,
-           py::arg("width") = 640, py::arg("height") = 480)
-      .def_readwrite("fx", &PinholeCamera::fx)
-      .def_readwrite("fy", &PinholeCamera::fy)
-      .def_readwrite("cx", &PinholeCamera::cx)
-      .def_readwrite("cy", &PinholeCamera::cy)
-      .def_readwrite("width", &PinholeCamera::width)
-      .def_readwrite("height", &PinholeCamera::height)
+  py::class_<PinholeCamera> cls(m, "Camera", "Pinhole camera (pixels: x right, y down, centres at integers; "
+                                             "metres); fx, fy, cx, cy checked as a camera file's are");
+  cls.def(py::init([](double fx, double fy, double cx, double cy, int width, int height) {
+            return checked_camera(PinholeCamera{fx, fy, cx, cy, width, height});
+          }),
+          py::arg("fx") = 525.0, py::arg("fy") = 525.0, py::arg("cx") = 319.5, py::arg("cy") = 239.5,
+          py::arg("width") = 640, py::arg("height") = 480);
+  camera_field(cls, "fx", &PinholeCamera::fx);
+  camera_field(cls, "fy", &PinholeCamera::fy);
+  camera_field(cls, "cx", &PinholeCamera::cx);
+  camera_field(cls, "cy", &PinholeCamera::cy);
+  camera_field(cls, "width", &PinholeCamera::width);
+  camera_field(cls, "height", &PinholeCamera::height);
+  cls
       .def_property_readonly("K", &PinholeCamera::K, "3x3 intrinsic matrix")
       .def("scaled", &PinholeCamera::scaled, py::arg("level"), "the camera of pyramid level `level`")
       .def_static("preset", &PinholeCamera::preset, py::arg("name"))
       .def_static("preset_names", &PinholeCamera::preset_names)
-      .def_static("load", &PinholeCamera::load, py::arg("path"), "camera file (JSON or key-value text)")
+      .def_static("load",
+                  [](const std::string& path) {
+                    require_existing_path(path, "Camera.load");
+                    return PinholeCamera::load(path);
+                  },
+                  py::arg("path"), "camera file (JSON or key-value text)")
       .def("save", &PinholeCamera::save, py::arg("path"), "writes the JSON form atomically")
       .def("describe", &PinholeCamera::describe)
       .def(py::self == py::self)
@@ -68,8 +102,8 @@ void bind_camera(py::module_& m) {
       .def(py::pickle(
           [](const PinholeCamera& c) { return py::make_tuple(c.fx, c.fy, c.cx, c.cy, c.width, c.height); },
           [](const py::tuple& t) {
-            return PinholeCamera{t[0].cast<double>(), t[1].cast<double>(), t[2].cast<double>(),
-                                 t[3].cast<double>(), t[4].cast<int>(),    t[5].cast<int>()};
+            return checked_camera(PinholeCamera{t[0].cast<double>(), t[1].cast<double>(), t[2].cast<double>(),
+                                                t[3].cast<double>(), t[4].cast<int>(), t[5].cast<int>()});
           }));
 }
 
@@ -85,13 +119,16 @@ void bind_se3(py::module_& m) {
 void bind_frame(py::module_& m) {
   py::class_<RgbdFrame>(m, "Frame", "One RGB-D frame: depth float32 (H, W) metres, colour uint8 (H, W, 3) RGB")
       .def(py::init([](const py::object& depth, const py::object& color, double timestamp,
-                       const py::object& T_world_camera_gt) {
-             RgbdFrame f = frame_from_arrays(depth, color, timestamp, T_world_camera_gt, 0);
+                       const py::object& T_world_camera_gt, const py::object& depth_scale) {
+             RgbdFrame f = frame_from_arrays(depth, color, timestamp, T_world_camera_gt, 0, depth_scale);
              if (f.depth.width() != f.color.width() || f.depth.height() != f.color.height())
                throw ValueError("Frame: depth and color differ in size");
              return f;
            }),
-           py::arg("depth"), py::arg("color"), py::arg("timestamp") = 0.0, py::arg("T_world_camera_gt") = py::none())
+           py::arg("depth"), py::arg("color"), py::arg("timestamp") = 0.0, py::arg("T_world_camera_gt") = py::none(),
+           py::arg("depth_scale") = py::none(),
+           "depth: float32 (H, W) metres, or uint16 with depth_scale units per metre (1000: millimetres, 5000: "
+           "TUM); color uint8 (H, W, 3) RGB; timestamp seconds (finite)")
       .def_property_readonly("depth", [](py::object self) { return depth_view(self.cast<RgbdFrame&>().depth, self); })
       .def_property_readonly("color", [](py::object self) { return color_view(self.cast<RgbdFrame&>().color, self); })
       .def_readonly("timestamp", &RgbdFrame::timestamp_s)
@@ -166,11 +203,20 @@ void bind_mesh(py::module_& m) {
         return "hashfusion.Mesh(" + std::to_string(mesh.vertices.size()) + " vertices, " +
                std::to_string(mesh.triangles.size()) + " faces)";
       });
-  m.def("load_mesh", &read_ply_mesh, py::arg("path"), "reads a PLY mesh (ASCII or binary)");
+  m.def("load_mesh",
+        [](const std::string& path) {
+          require_existing_path(path, "load_mesh");
+          return read_mesh_file(path);
+        },
+        py::arg("path"), "reads a PLY (ASCII or binary) or OBJ mesh, by the file's extension");
 }
 
 void bind_trajectory(py::module_& m) {
-  m.def("read_trajectory", [](const std::string& path) { return trajectory_to_python(read_tum_trajectory(path)); },
+  m.def("read_trajectory",
+        [](const std::string& path) {
+          require_existing_path(path, "read_trajectory");
+          return trajectory_to_python(read_tum_trajectory(path));
+        },
         py::arg("path"), "TUM trajectory file -> (stamps (N,), poses (N, 4, 4) T_world_camera)");
   m.def("write_trajectory",
         [](const std::string& path, const py::object& trajectory) {

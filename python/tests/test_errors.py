@@ -23,8 +23,10 @@ def test_bad_config(camera):
 
 
 def test_bad_dataset(tmp_path):
-    with pytest.raises(hf.Error, match=str(tmp_path / "missing")):
+    # a missing folder is Python's FileNotFoundError (issue 36), naming the path
+    with pytest.raises(FileNotFoundError, match=str(tmp_path / "missing")) as missing:
         hf.open_dataset(str(tmp_path / "missing"))
+    assert missing.value.filename == str(tmp_path / "missing")
     with pytest.raises(hf.Error, match="preset"):
         hf.open_dataset("synthetic:no-such-preset")
     # a TUM folder whose list file is malformed: ParseError naming file and line

@@ -71,7 +71,10 @@ def test_frame_arrays_round_trip_and_are_views():
     del f
     np.testing.assert_array_equal(a, depth)
     # non-contiguous and float64 inputs are converted
-    g = hf.Frame(depth.astype(np.float64)[:, :], np.ascontiguousarray(color[:, :, :]))
+    # float64 depth is refused (issue 36: nothing is converted without a word), naming dtype and shape
+    with pytest.raises(ValueError, match=r"float64 array of shape \(48, 64\)"):
+        hf.Frame(depth.astype(np.float64), color)
+    g = hf.Frame(depth[:, :], np.ascontiguousarray(color[:, :, :]))
     np.testing.assert_array_equal(g.depth, depth)
     assert g.T_world_camera_gt is None
 

@@ -6,7 +6,7 @@ file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 
 file(WRITE ${WORK}/empty.obj "")
-execute_process(COMMAND ${HASHFUSION} head-features --mesh ${WORK}/empty.obj --out ${WORK}/empty_out
+execute_process(COMMAND ${HASHFUSION} head-features --input ${WORK}/empty.obj --out ${WORK}/empty_out
                 RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_QUIET)
 if(NOT rc EQUAL 1 OR NOT err MATCHES "empty.obj: the mesh has no triangles")
   message(FATAL_ERROR "empty mesh: expected exit 1 and a message naming the file, got ${rc}: ${err}")
@@ -21,12 +21,12 @@ if(NOT EXISTS ${MESH})
   message(STATUS "skipped the real head: ${MESH} not found (../shared absent)")
   return()
 endif()
-execute_process(COMMAND ${HASHFUSION} head-features --mesh ${MESH} --out ${WORK}/bad --morphology grow:3
+execute_process(COMMAND ${HASHFUSION} head-features --input ${MESH} --out ${WORK}/bad --morphology grow:3
                 RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_QUIET)
 if(NOT rc EQUAL 1 OR NOT err MATCHES "unknown operator 'grow'")
   message(FATAL_ERROR "bad --morphology: expected exit 1 naming the operator, got ${rc}: ${err}")
 endif()
-execute_process(COMMAND ${HASHFUSION} head-features --mesh ${MESH} --out ${WORK}/out --auto
+execute_process(COMMAND ${HASHFUSION} head-features --input ${MESH} --out ${WORK}/out --auto
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "head-features failed (${rc}): ${err}")

@@ -10,12 +10,12 @@ function(run)
   endif()
 endfunction()
 
-set(common --cell-m 1 --areas 1500,10000,35000 --t 2)
+set(common --cell-m 1 --areas-m2 1500,10000,35000 --t-m-per-m 2)
 run(--input synthetic:3 --out ${DIR}/single ${common})
 set(las ${DIR}/single/synthetic.las)
 # The tiles as six processes through the Slurm script's local mode, then its merge.
 execute_process(COMMAND ${CMAKE_COMMAND} -E env HASHFUSION=${HASHFUSION} HF_INPUTS=${las} HF_OUT=${DIR}/merged HF_TILES=3,2
-                        "HF_ARGS=--cell-m 1 --areas 1500,10000,35000 --t 2 --max-height-m 10 --max-building-m 20"
+                        "HF_ARGS=--cell-m 1 --areas-m2 1500,10000,35000 --t-m-per-m 2 --max-height-m 10 --max-building-m 20"
                         bash ${SCRIPTS}/lidar_tiles.slurm local
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)

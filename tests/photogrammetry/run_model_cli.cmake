@@ -19,7 +19,7 @@ if(NOT EXISTS ${DATA})
   message(STATUS "skipped: ${DATA} not found (../shared absent)")
   return()
 endif()
-execute_process(COMMAND ${HASHFUSION} model --shots ${DATA} --polygons ${WORK}/bad.json --out ${WORK}/bad_out
+execute_process(COMMAND ${HASHFUSION} model --input ${DATA} --polygons ${WORK}/bad.json --out ${WORK}/bad_out
                 RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_QUIET)
 if(NOT rc EQUAL 1 OR NOT err MATCHES "bad.json: polygon 'p' view 1: no shot named 'nope.png'")
   message(FATAL_ERROR "unknown shot: expected exit 1 naming the sketch, got ${rc}: ${err}")
@@ -30,7 +30,7 @@ if(NOT n EQUAL 1)
   message(FATAL_ERROR "unknown shot: expected one line on stderr, got: ${err}")
 endif()
 
-execute_process(COMMAND ${HASHFUSION} model --shots ${DATA} --polygons ${WORK}/sketch.json --out ${WORK}/out
+execute_process(COMMAND ${HASHFUSION} model --input ${DATA} --polygons ${WORK}/sketch.json --out ${WORK}/out
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "model failed (${rc}): ${err}")
@@ -66,7 +66,7 @@ endforeach()
 file(WRITE ${WORK}/half.json "{\"polygons\": [{\"id\": \"tri\", \"views\": [${views}]},
   {\"id\": \"half\", \"views\": [{\"shot\": \"templeR0013.png\",
    \"points\": [[292.329, 235.942], [328.341, 202.020], [417.974, 241.314]]}], \"same_plane_as\": \"tri\"}]}")
-execute_process(COMMAND ${HASHFUSION} model --shots ${DATA} --polygons ${WORK}/half.json --out ${WORK}/transfer
+execute_process(COMMAND ${HASHFUSION} model --input ${DATA} --polygons ${WORK}/half.json --out ${WORK}/transfer
                         --transfer --no-textures
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0 OR NOT out MATCHES "half -> templeR0016.png: transferred")
@@ -95,7 +95,7 @@ endif()
 # Without same_plane_as (which would win, guidance.h) the transferred views fix 'half' by DLT.
 string(REPLACE "\"same_plane_as\": \"tri\"," "" sketch "${sketch}")
 file(WRITE ${WORK}/multi.json "${sketch}")
-execute_process(COMMAND ${HASHFUSION} model --shots ${DATA} --polygons ${WORK}/multi.json
+execute_process(COMMAND ${HASHFUSION} model --input ${DATA} --polygons ${WORK}/multi.json
                         --out ${WORK}/retriangulated --no-textures --no-overlays
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 file(READ ${WORK}/retriangulated/polygons.json json2)
@@ -106,7 +106,7 @@ endif()
 
 # Interactive sketching by its events (sketch_events.txt: tri's three views, a refused click outside the image and
 # an undone one): the same polygon, green by DLT, and OUT/sketch.json holds the sketch.
-execute_process(COMMAND ${HASHFUSION} model --shots ${DATA} --events ${CMAKE_CURRENT_LIST_DIR}/sketch_events.txt
+execute_process(COMMAND ${HASHFUSION} model --input ${DATA} --events ${CMAKE_CURRENT_LIST_DIR}/sketch_events.txt
                         --out ${WORK}/events --no-textures
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0 OR NOT EXISTS ${WORK}/events/sketch.json)
@@ -123,7 +123,7 @@ if(NOT state STREQUAL "green" OR NOT z MATCHES "^-0\\.0(5999|6000)" OR NOT views
                       "${views} ${vertices}")
 endif()
 file(WRITE ${WORK}/bad_events.txt "shot templeR0013.png\njump 3\n")
-execute_process(COMMAND ${HASHFUSION} model --shots ${DATA} --events ${WORK}/bad_events.txt --out ${WORK}/bad_events
+execute_process(COMMAND ${HASHFUSION} model --input ${DATA} --events ${WORK}/bad_events.txt --out ${WORK}/bad_events
                 RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_QUIET)
 if(NOT rc EQUAL 1 OR NOT err MATCHES "bad_events.txt:2: sketch event 'jump 3': expected")
   message(FATAL_ERROR "bad event: expected exit 1 naming the file and line, got ${rc}: ${err}")

@@ -126,6 +126,28 @@ TEST(RunReport, ParsesCameraAndKeyframes) {
             "r.json: expected a run's report.json (JSON), got a syntax error at byte 2");
 }
 
+// Issue 36: report.json's "camera" is an object; a report of either form reads as the same camera.
+TEST(RunReport, ReadsTheStructuredCamera) {
+  const RunReport r = parse_run_report(
+      R"({"input": "d", "camera": {"fx": 517.3, "fy": 516.5, "cx": 318.6, "cy": 255.3, "width": 640, "height": 480},
+          "per_frame": [{"timestamp_s": 1.25, "state": "tracked", "keyframe": true}]})",
+      "report.json");
+  EXPECT_EQ(r.camera.fx, 517.3);
+  EXPECT_EQ(r.camera.fy, 516.5);
+  EXPECT_EQ(r.camera.cx, 318.6);
+  EXPECT_EQ(r.camera.cy, 255.3);
+  EXPECT_EQ(r.camera.width, 640);
+  EXPECT_EQ(r.camera.height, 480);
+  // a camera object outside the bounds a camera file is held to is refused naming the report
+  const std::string error = error_of([] {
+    parse_run_report(R"({"input": "d", "camera": {"fx": -1, "fy": 516.5, "cx": 318.6, "cy": 255.3, "width": 640,
+                        "height": 480}, "per_frame": []})",
+                     "r.json");
+  });
+  EXPECT_NE(error.find("r.json"), std::string::npos) << error;
+  EXPECT_NE(error.find("fx within"), std::string::npos) << error;
+}
+
 TEST(RunNetwork, KeyframesBecomeShotsWithTheTrackedPosesAndTheMeshIsTheCloud) {
   namespace fs = std::filesystem;
   const fs::path root = fs::temp_directory_path() / ("hf_pg_run_" + std::to_string(::getpid()));
