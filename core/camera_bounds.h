@@ -22,4 +22,16 @@ inline constexpr double kMaxFocalPerPixel = 114.6;
 void check_camera_intrinsics(const PinholeCamera& camera, const std::string& file,
                              const std::map<std::string, int>& key_lines = {});
 
+// The largest |coefficient| a camera file may give for k1 k2 k3 and for p1 p2: real Kinect / webcam lenses stay
+// below 2 and 0.05 (TUM fr1: 0.26 -0.95 -0.005 0.003 1.16); 1e3 and 1 leave room for wide lenses yet refuse 1e300.
+inline constexpr double kMaxRadialDistortion = 1e3;
+inline constexpr double kMaxTangentialDistortion = 1.0;
+
+// Throws hf::ParseError "FILE:LINE: expected k2 within -1000..1000, got 1e+300" for a coefficient outside the bounds
+// above, and "FILE:LINE: expected a distortion whose image radius grows with the ray's angle over the whole image,
+// ..." when the radial part folds back inside the image (its remap would not be one-to-one: two rays at one
+// pixel). `camera` gives the image extent (its intrinsics already checked); `key_lines` as above.
+void check_lens_distortion(const PinholeCamera& camera, const std::string& file,
+                           const std::map<std::string, int>& key_lines = {});
+
 }  // namespace hf

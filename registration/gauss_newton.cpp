@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "registration/pixel_selection.h"
+#include "registration/so3_prealign.h"
 
 namespace hf {
 namespace {
@@ -309,6 +310,11 @@ RegistrationResult GaussNewtonRegistration::align_impl(const FramePyramid& curre
   const Vector6d unit_scale = balanced_units(current.levels[0].vertices);
 
   SE3 T = T_initial;
+  if (!o.so3_iterations.empty() && (kernel.inputs & kIntensityInputs) != 0) {
+    // Rotation first (registration/so3_prealign.h) on the levels this solve uses; the translation keeps its guess.
+    const So3PrealignResult so3 = so3_prealign(current, reference, T_initial.rotation(), o.so3_iterations, levels);
+    if (so3.accepted) T = SE3(so3.R_ref_cur, T_initial.translation());
+  }
   NormalEquations last;
   std::vector<NormalEquations> last_terms;
   Vector6d last_step = Vector6d::Zero();

@@ -99,11 +99,14 @@ void GaussNewtonOptions::visit(OptionVisitor& v) {
   v("row_selection_budget", row_selection.budget_per_tile);
   v("row_selection_depth_edge_weight", row_selection.depth_edge_weight);
   v("row_selection_levels", row_selection.levels);
+  v("so3_iterations", so3_iterations);
 }
 
 void GaussNewtonOptions::validate() const {
   check(!iterations.empty() && iterations.size() <= 8, "iterations must list 1..8 levels");
   for (int n : iterations) check(n >= 0 && n <= 1000, "iterations per level must be in 0..1000");
+  check(so3_iterations.size() <= 8, "so3_iterations must list at most 8 levels");
+  for (int n : so3_iterations) check(n >= 0 && n <= 1000, "so3_iterations per level must be in 0..1000");
   check(std::isfinite(min_step_rotation_rad) && min_step_rotation_rad >= 0.0, "min_step_rotation_rad must be >= 0");
   check(std::isfinite(min_step_translation_m) && min_step_translation_m >= 0.0,
         "min_step_translation_m must be >= 0");

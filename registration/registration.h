@@ -131,6 +131,10 @@ struct GaussNewtonOptions {
   // row_selection (0 all, 1 importance, 2 uniform), row_selection_tile_px, row_selection_budget,
   // row_selection_depth_edge_weight, row_selection_levels. Measured in bench/results/fewer_rays_tracking.md.
   PixelSelectionOptions row_selection;
+  // Rotation-first alignment (registration/so3_prealign.h, ElasticFusion's SO(3) step) for methods that read
+  // colour: Gauss-Newton iterations of the photometric rotation-only fit on the coarsest pyramid levels before the
+  // dense solve, [0] for the coarsest; empty = off (the default; measured in bench/results/large_motion.md).
+  std::vector<int> so3_iterations;
 
   void visit(OptionVisitor& v);
   void validate() const;  // hf::Error naming the first bad field

@@ -103,10 +103,11 @@ struct Pipeline::Verdict {
 };
 
 Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
-    : config_(config), camera_(camera), tracking_camera_(camera.scaled(config.tracking_level)),
+    : config_(config), camera_(camera.pinhole()), tracking_camera_(camera.pinhole().scaled(config.tracking_level)),
       grid_((config.validate(), config.volume)),
       colour_check_(config.colour_check), reference_(std::make_unique<Reference>()), keyframes_(config.keyframes),
       fused_(config.reintegration) {
+  if (!camera.distortion.none()) undistorter_ = std::make_unique<Undistorter>(camera);
 #ifdef HF_HAVE_FUSION_OPENCL
   if (config_.backend == "opencl" && config_.stream_radius_m <= 0)
     device_map_ = std::make_unique<fusion::DeviceVoxelGrid>(config_.volume);
@@ -142,7 +143,8 @@ Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
 
 Pipeline::~Pipeline() = default;
 
-FrameResult Pipeline::process(const RgbdFrame& frame) {
+FrameResult Pipeline::process(const RgbdFrame& input) {
+  const RgbdFrame& frame = input;  // checked as given, then (with a distorted camera) undistorted below
   if (frame.depth.width() != camera_.width || frame.depth.height() != camera_.height)
     throw Error((frame.depth_file.empty() ? "frame " + std::to_string(frame.index) : frame.depth_file) +
                 ": depth is " + std::to_string(frame.depth.width()) + "x" + std::to_string(frame.depth.height()) +
@@ -154,6 +156,28 @@ FrameResult Pipeline::process(const RgbdFrame& frame) {
   FrameResult r;
   r.index = frame.index;
   r.timestamp_s = frame.timestamp_s;
+  if (undistorter_) return process_pinhole(undistort(input, &r), std::move(r));
+  return process_pinhole(input, std::move(r));
+}
+
+// Undistorts a distorted camera's frame (core/undistort.h), timed into `preprocess`: every later stage and every
+// stored copy (keyframes, re-fusion) sees the pinhole camera_.
+RgbdFrame Pipeline::undistort(const RgbdFrame& input, FrameResult* r) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  RgbdFrame frame;
+  frame.index = input.index;
+  frame.timestamp_s = input.timestamp_s;
+  frame.depth = undistorter_->depth(input.depth);
+  frame.color = undistorter_->color(input.color);
+  frame.T_world_camera_gt = input.T_world_camera_gt;
+  frame.depth_file = input.depth_file;
+  frame.color_file = input.color_file;
+  frame.arrival = input.arrival;
+  r->ms.undistort = r->ms.preprocess = ms_since(t0);
+  return frame;
+}
+
+FrameResult Pipeline::process_pinhole(const RgbdFrame& frame, FrameResult r) {
 
   if (!registration_) {  // groundtruth: fusion only
     if (!frame.T_world_camera_gt) {
@@ -242,7 +266,7 @@ FramePyramid Pipeline::preprocess(const RgbdFrame& frame, FrameResult* r) const 
   FramePyramidOptions po = config_.pyramid;
   po.first_level = config_.tracking_level;
   FramePyramid p = frame_pyramid(device_pyramid_.get(), frame.depth, frame.color, camera_, po);
-  r->ms.preprocess = ms_since(t0);
+  r->ms.preprocess = r->ms.undistort + ms_since(t0);
   return p;
 }
 

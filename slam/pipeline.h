@@ -91,6 +91,7 @@
 
 #include "core/camera.h"
 #include "core/se3.h"
+#include "core/undistort.h"
 #include "fusion/integrate.h"
 #include "fusion/raycast.h"
 #include "fusion/streaming.h"
@@ -131,6 +132,7 @@ const char* to_string(TrackState state);
 struct StageMs {
   double read = 0, preprocess = 0, track = 0, relocalise = 0, integrate = 0, raycast = 0, keyframe = 0, loop = 0,
          reintegrate = 0;
+  double undistort = 0;  // part of preprocess: a distorted camera's remap (core/undistort.h)
   double total() const {
     return read + preprocess + track + relocalise + integrate + raycast + keyframe + loop + reintegrate;
   }
@@ -170,6 +172,8 @@ class Pipeline {
 
   // Processes one decoded frame (depth and colour of the camera's size). Never throws for bad pixel values;
   // throws hf::Error for a frame of the wrong size and fusion::CapacityError when the block pool is exhausted.
+  // With a distorted camera (PinholeCamera::distortion) the frame is first undistorted (core/undistort.h, timed
+  // into `preprocess`); camera() is then the pinhole camera of the undistorted images.
   FrameResult process(const RgbdFrame& frame);
 
   // Realtime mode (live input, replay at the recorded rate): back-end results are applied as soon as they are
@@ -228,6 +232,8 @@ class Pipeline {
   struct Reference;
   struct Verdict;
   FramePyramid preprocess(const RgbdFrame& frame, FrameResult* r) const;
+  RgbdFrame undistort(const RgbdFrame& input, FrameResult* r) const;
+  FrameResult process_pinhole(const RgbdFrame& frame, FrameResult r);
   void initialise(const RgbdFrame& frame, FramePyramid& current, FrameResult* r);
   Verdict track(const FramePyramid& current, double timestamp_s, FrameResult* r);
   Verdict decide(const RegistrationResult& reg, const FramePyramid& current, double timestamp_s,
@@ -253,8 +259,9 @@ class Pipeline {
   void lose(FrameResult* r, std::string why);
 
   PipelineConfig config_;
-  PinholeCamera camera_;
+  PinholeCamera camera_;           // the constructor's camera without distortion (the frames are undistorted)
   PinholeCamera tracking_camera_;  // camera_.scaled(tracking_level)
+  std::unique_ptr<Undistorter> undistorter_;  // null unless the constructor's camera has distortion
   fusion::VoxelBlockGrid grid_;
   std::unique_ptr<fusion::DeviceVoxelGrid> device_map_;  // backend opencl: the map integrate() fuses into
   bool device_map_stale_ = false;  // grid_ changed on the host (re-fusion): load it before the next integrate

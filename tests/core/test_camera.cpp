@@ -163,11 +163,46 @@ TEST(CameraFile, BoundsUnknownAndRepeatedKeysNamed) {
   EXPECT_NO_THROW(PinholeCamera::parse("fx 73000\nfy 500\n" + tail, "k.txt"));  // 0.5 degrees
   EXPECT_EQ(error_of("fx 500\nfy 500\nfx 1\n" + tail, "k.txt"), "k.txt:3: 'fx' given twice (first on line 1)");
   const std::string json =
-      "{\"fx\": 500, \"fy\": 500, \"cx\": 320, \"cy\": 240,\n \"k1\": 0.1, \"width\": 640, \"height\": 480}";
-  EXPECT_EQ(error_of(json, "c.json"), "c.json:2: expected only the keys fx fy cx cy width height, got 'k1'");
+      "{\"fx\": 500, \"fy\": 500, \"cx\": 320, \"cy\": 240,\n \"k4\": 0.1, \"width\": 640, \"height\": 480}";
+  EXPECT_EQ(error_of(json, "c.json"),
+            "c.json:2: expected only the keys fx fy cx cy width height k1 k2 p1 p2 k3, got 'k4'");
   const std::string json_far =
       "{\"fx\": 500,\n\"fy\": 1e300, \"cx\": 320, \"cy\": 240, \"width\": 640, \"height\": 480}";
   EXPECT_EQ(error_of(json_far, "c.json").rfind("c.json:2: expected fy within", 0), 0u) << error_of(json_far, "c.json");
+}
+
+// Issue 34: lens distortion (k1 k2 p1 p2 k3) in both forms of the one schema, optional, validated at its line.
+TEST(CameraFile, LensDistortion) {
+  const std::string base = "fx 517.3\nfy 516.5\ncx 318.6\ncy 255.3\nwidth 640\nheight 480\n";
+  EXPECT_TRUE(PinholeCamera::parse(base, "k.txt").distortion.none());
+  const PinholeCamera t =
+      PinholeCamera::parse(base + "k1 0.2624\nk2 -0.9531\np1 -0.0054\np2 0.0026\nk3 1.1633\n", "k.txt");
+  EXPECT_EQ(t, PinholeCamera::preset("fr1"));
+  const PinholeCamera j = PinholeCamera::parse(
+      R"({"fx": 517.3, "fy": 516.5, "cx": 318.6, "cy": 255.3, "width": 640, "height": 480,
+          "k1": 0.2624, "k2": -0.9531, "p1": -0.0054, "p2": 0.0026, "k3": 1.1633})", "c.json");
+  EXPECT_EQ(j, t);
+  EXPECT_EQ(PinholeCamera::parse(base + "k2 0.5\n", "k.txt").distortion, (LensDistortion{0.0, 0.5, 0.0, 0.0, 0.0}));
+  EXPECT_EQ(PinholeCamera::preset("fr1").pinhole(), (PinholeCamera{517.3, 516.5, 318.6, 255.3, 640, 480}));
+  EXPECT_TRUE(PinholeCamera::preset("fr3").distortion.none());
+  EXPECT_NE(PinholeCamera::preset("fr1").describe().find("k1=0.2624"), std::string::npos);
+  // Non-finite, huge and repeated values at their line.
+  EXPECT_EQ(error_of(base + "k1 nan\n", "k.txt").rfind("k.txt:7: expected", 0), 0u);
+  EXPECT_EQ(error_of(base + "k1 inf\n", "k.txt").rfind("k.txt:7: expected", 0), 0u);
+  EXPECT_EQ(error_of(base + "k1 0.1\nk2 1e300\n", "k.txt"), "k.txt:8: expected k2 within -1000..1000, got 1e+300");
+  EXPECT_EQ(error_of(base + "p2 2\n", "k.txt"), "k.txt:7: expected p2 within -1..1, got 2");
+  EXPECT_EQ(error_of(base + "k3 1\nk3 1\n", "k.txt"), "k.txt:8: 'k3' given twice (first on line 7)");
+  EXPECT_EQ(error_of(R"({"fx": 517, "fy": 516, "cx": 318, "cy": 255, "width": 640, "height": 480,
+                       "k1": 1e400})", "c.json").rfind("c.json: expected a JSON camera object", 0), 0u);
+  EXPECT_EQ(error_of("{\"fx\": 517, \"fy\": 516, \"cx\": 318, \"cy\": 255, \"width\": 640, \"height\": 480,\n"
+                     "\"k1\": 2000}", "c.json"), "c.json:2: expected k1 within -1000..1000, got 2000");
+  // A radial term that folds the image back inside the frame: r (1 + k1 r^2) has slope 1 + 3 k1 r^2, which k1 = -1
+  // turns negative at r = 0.577, inside the corners' 0.78.
+  const std::string folded = error_of(base + "k1 -1\n", "k.txt");
+  EXPECT_EQ(folded.rfind("k.txt:7: expected a distortion whose image radius grows", 0), 0u) << folded;
+  EXPECT_NE(folded.find("0.57"), std::string::npos) << folded;
+  // The same lens on a narrow crop never reaches the fold: accepted.
+  EXPECT_NO_THROW(PinholeCamera::parse("fx 517.3\nfy 516.5\ncx 100\ncy 100\nwidth 200\nheight 200\nk1 -1\n", "k.txt"));
 }
 
 TEST(CameraFile, SaveLoadRoundTripAndMissingFile) {
@@ -175,8 +210,9 @@ TEST(CameraFile, SaveLoadRoundTripAndMissingFile) {
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "cam.json").string();
   const PinholeCamera cam = PinholeCamera::preset("fr2");
+  ASSERT_FALSE(cam.distortion.none());
   cam.save(path);
-  EXPECT_EQ(PinholeCamera::load(path), cam);
+  EXPECT_EQ(PinholeCamera::load(path), cam);  // distortion included
   try {
     PinholeCamera::load((dir / "missing.json").string());
     FAIL() << "expected hf::Error";
