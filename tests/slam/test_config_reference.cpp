@@ -43,7 +43,9 @@ TEST(ConfigReference, DefaultsLieInTheirRanges) {
   config_reference_flatten(config_to_json(PipelineConfig{}), "", &keys);
   for (const auto& [key, value] : keys) {
     const ConfigKey* row = find_config_key(key);
-    if (row && value.is_number()) EXPECT_TRUE(in_config_range(*row, value.get<double>())) << key << " = " << value;
+    if (row && value.is_number()) {
+      EXPECT_TRUE(in_config_range(*row, value.get<double>())) << key << " = " << value;
+    }
   }
 }
 
