@@ -70,7 +70,8 @@ def test_no_leak_errors_and_python_objects(fused):
     p = fused[0]
     def bad():
         try:
-            p.process(np.zeros((2, 2), np.float32), np.zeros((2, 2, 3), np.uint8), 0.0)
+            # a stamp after every frame fused so far, so the frame's size is what is refused
+            p.process(np.zeros((2, 2), np.float32), np.zeros((2, 2, 3), np.uint8), 1e6)
         except hf.Error:
             pass
     tracemalloc.start()

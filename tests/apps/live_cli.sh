@@ -45,7 +45,8 @@ record_replay)
   timeout 120 "$HF" run --input rec --out run > log 2>&1 || fail "run on the recording failed: $(cat log)"
   [ "$(json run/report.json "j['frames']")" = 12 ] || fail "the replay did not process the 12 recorded frames"
   json run/report.json "j['camera_origin']" | grep -q "camera.json" || fail "the replay did not use the recorded camera"
-  [ "$(json run/report.json "j['camera']")" = "fx=262.5 fy=262.5 cx=159.5 cy=119.5 320x240" ] ||
+  [ "$(json run/report.json "[j['camera'][k] for k in ('fx', 'fy', 'cx', 'cy', 'width', 'height')]")" = \
+    "[262.5, 262.5, 159.5, 119.5, 320, 240]" ] ||
     fail "camera changed: $(json run/report.json "j['camera']")"
   ;;
 live_run_interrupt)

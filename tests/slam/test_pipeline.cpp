@@ -367,7 +367,7 @@ TEST(PipelineConfig, JsonRoundTripAndErrors) {
   const std::string bogus = error_of({{"registration", "bogus"}, {"registration_options", nlohmann::json::object()}});
   EXPECT_EQ(bogus.rfind("cfg.json: ", 0), 0u) << bogus;
   EXPECT_NE(bogus.find("bogus"), std::string::npos) << bogus;
-  EXPECT_NE(error_of({{"volume", {{"voxel_m", 1e-9}}}}).find("voxel_m must be in [0.0001, 10] metres, got 1e-09"),
+  EXPECT_NE(error_of({{"volume", {{"voxel_m", 1e-9}}}}).find("volume.voxel_m: expected 0.0001..10 m, got 1e-09"),
             std::string::npos) << error_of({{"volume", {{"voxel_m", 1e-9}}}});
 }
 
