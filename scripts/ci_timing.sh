@@ -3,7 +3,8 @@
 #
 # Clones COMMIT (default HEAD) of this repository into a fresh folder beside it (so ../shared is beside the clone,
 # as in CI), then runs what .ci/run runs, scripts/test.sh, with no compiler cache (CCACHE_DISABLE=1) and CI=true,
-# timing each phase: configure, build and suite of the release preset, then of the asan preset. It prints the phase
+# timed as a whole, with the phases test.sh reports (release build, release suite beside which the asan build
+# runs, asan suite). It prints the phase
 # table and, per preset, the 20 most expensive build steps (.ninja_log) and the 20 slowest tests (CTest's cost
 # data), and writes them as Markdown to ci_timing.md in the clone's parent folder. Run it on a quiet machine: the
 # numbers are wall-clock seconds. The Debian packages must already be installed (scripts/setup.sh; apt is not
@@ -47,14 +48,16 @@ phase() {  # phase NAME COMMAND...: runs and times one phase; a failure ends the
   echo "ci_timing: $name $((SECONDS - start)) s"
 }
 total_start=$SECONDS
-# A failing suite is reported and the measurement goes on (its time is still the number); a failed configure or
-# build ends it.
-for preset in release asan; do
-  phase "configure_$preset" cmake --preset "$preset" || break
-  phase "build_$preset" cmake --build --preset "$preset" || break
-  # The JUnit file keeps every test's output (the console shows only failures'), for the GoogleTest case counts.
-  phase "suite_$preset" ctest --preset "$preset" --output-junit "$clone/ci_timing_suite_${preset}.xml" || true
-done
+# Exactly what .ci/run runs (scripts/test.sh: the asan build beside the release suite), timed as a whole; its own
+# "test.sh: PHASE N s" lines give the phases. The JUnit files keep every test's output (the console shows only
+# failures'), for the GoogleTest case counts. A failure is reported and its time is still the number.
+export HF_CTEST_ARGS_RELEASE="--output-junit $clone/ci_timing_suite_release.xml"
+export HF_CTEST_ARGS_ASAN="--output-junit $clone/ci_timing_suite_asan.xml"
+phase "test.sh" bash scripts/test.sh || true
+while read -r line; do
+  phase_names+=("${line% *}")
+  phase_seconds+=("${line##* }")
+done < <(sed -n 's/^test\.sh: \(.*\) \([0-9][0-9]*\) s$/\1 \2/p' "$clone/ci_timing_test.sh.log")
 total=$((SECONDS - total_start))
 
 {
@@ -79,8 +82,13 @@ total=$((SECONDS - total_start))
     awk 'NR > 1 {printf "%.1f %s\n", ($2 - $1) / 1000, $4}' "$dir/.ninja_log" | sort -rn | head -20 |
       awk '{printf "| %s | `%s` |\n", $1, $2}'
     cost="$dir/Testing/Temporary/CTestCostData.txt"
-    log="$clone/ci_timing_suite_$preset.log"
-    if [[ -f "$log" ]]; then
+    log="$clone/ci_timing_suite_$preset.log"  # this preset's part of test.sh's log
+    if [[ "$preset" == release ]]; then
+      sed -n '/^test\.sh: release build/,/^test\.sh: release suite/p' "$clone/ci_timing_test.sh.log" >"$log"
+    else
+      sed -n '/^test\.sh: asan build/,$p' "$clone/ci_timing_test.sh.log" >"$log"
+    fi
+    if [[ -s "$log" ]]; then
       summary=$(grep -E "tests passed|tests failed" "$log" | tail -1 || true)
       skipped=$(grep -cE '\((Skipped|Not Run)\)$' "$log" || true)
       echo
