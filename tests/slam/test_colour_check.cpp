@@ -242,8 +242,9 @@ CheckedRun run_preset(const std::string& preset, bool check, int frames) {
 }
 
 // The room's colour is registered: the check says so and combined tracks on. The same orbit with the colour
-// camera aside: the check says unregistered after its window, icp tracks from then on, and the trajectory is no
-// worse than combined's with the check off (which the photometric rows pull away from the geometry).
+// camera aside: the check says unregistered after its window, the depth-only method (sdf) tracks from then on, and
+// the trajectory is no worse than combined's with the check off (which the photometric rows pull away from the
+// geometry).
 TEST(ColourCheckPipeline, TellsRegisteredFromUnregisteredColour) {
   const int frames = 24;
   const CheckedRun room = run_preset("room", true, frames);
@@ -254,7 +255,7 @@ TEST(ColourCheckPipeline, TellsRegisteredFromUnregisteredColour) {
 
   const CheckedRun unreg = run_preset("unregistered", true, frames);
   EXPECT_EQ(unreg.summary.colour_verdict, "unregistered") << unreg.summary.colour_median_scale;
-  EXPECT_EQ(unreg.summary.tracking_registration, "icp");
+  EXPECT_EQ(unreg.summary.tracking_registration, ColourCheckOptions{}.depth_only_registration);
   ASSERT_TRUE(unreg.summary.colour_decided_at_frame);
   EXPECT_LE(*unreg.summary.colour_decided_at_frame, 12u);  // frames 2, 4, .., 10 give the 5 estimates
   EXPECT_EQ(unreg.summary.frames_lost, 0);
