@@ -78,14 +78,11 @@ done
 
 python3 - "$out" <<'PY'
 import json, os, sys
+sys.path.insert(0, "scripts")
+from bench_runs import runs  # noqa: E402
 out = sys.argv[1]
 rows = []
-for d in sorted(os.listdir(os.path.join(out, "runs"))):
-    p = os.path.join(out, "runs", d, "report.json")
-    if not os.path.isfile(p):
-        continue
-    j = json.load(open(p))
-    name, mode = d.rsplit("__", 1)
+for name, mode, j in runs(out):
     ms = j["ms_per_frame"]
     rows.append({"input": name, "mode": mode, "frames": j["frames"], "lost": j["frames_lost"],
                  "ate_cm": None if j["ate_rmse_m"] is None else 100 * j["ate_rmse_m"],

@@ -35,14 +35,11 @@ done
 
 python3 - "$out" <<'PY'
 import json, os, statistics, sys
+sys.path.insert(0, "scripts")
+from bench_runs import runs  # noqa: E402
 out = sys.argv[1]
 rows = []
-for d in sorted(os.listdir(os.path.join(out, "runs"))):
-    p = os.path.join(out, "runs", d, "report.json")
-    if not os.path.isfile(p):
-        continue
-    j = json.load(open(p))
-    name, mode = d.rsplit("__", 1)
+for name, mode, j in runs(out):
     scales = [f["colour_alignment"]["scale"] for f in j["per_frame"]
               if f.get("colour_alignment", {}).get("valid")]
     chi2 = [f["terms"]["chi2"] for f in j["per_frame"] if "terms" in f]

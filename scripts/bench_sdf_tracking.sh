@@ -13,15 +13,12 @@ for input in tum_fr1_rpy_first150 tum_fr1_rpy_frames150_269 tum_fr1_desk_9frames
 done
 python3 - "$out" "$(uptime)" <<'PY'
 import json, os, sys
+sys.path.insert(0, "scripts")
+from bench_runs import runs  # noqa: E402
 out, load = sys.argv[1], sys.argv[2]
 rows = ["| input | method | frames | lost | fallback | ATE cm | RPE cm/s | fps | track ms | raycast ms | total ms |",
         "|---|---|---|---|---|---|---|---|---|---|---|"]
-for d in sorted(os.listdir(os.path.join(out, "runs"))):
-    f = os.path.join(out, "runs", d, "report.json")
-    if not os.path.isfile(f):
-        continue
-    r = json.load(open(f))
-    name, method = d.split("__")
+for name, method, r in runs(out):
     ms = r["ms_per_frame"]
     cm = lambda v: "-" if v is None else f"{v * 100:.2f}"
     rows.append(f"| {name} | {method} | {r['frames']} | {r['frames_lost']} | {r['frames_fallback']} | "

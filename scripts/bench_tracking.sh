@@ -44,14 +44,11 @@ done
 
 python3 - "$out" <<'EOF'
 import json, os, sys
+sys.path.insert(0, "scripts")
+from bench_runs import runs  # noqa: E402
 out = sys.argv[1]
 rows = []
-for d in sorted(os.listdir(os.path.join(out, "runs"))):
-    p = os.path.join(out, "runs", d, "report.json")
-    if not os.path.isfile(p):
-        continue
-    r = json.load(open(p))
-    name, mode = d.rsplit("__", 1)
+for name, mode, r in runs(out):
     ms = r["ms_per_frame"]
     rows.append({
         "input": name, "mode": mode, "frames": r["frames"], "lost": r["frames_lost"],
