@@ -1,4 +1,4 @@
-// `hashfusion view mesh.ply | map.hfmap | OUTDIR [--screenshot FILE.png]`: browse a result in the OpenGL viewer
+// `hashfusion view mesh.ply | mesh.obj | map.hfmap | OUTDIR [--screenshot FILE.png]`: browse a result in the OpenGL viewer
 // (viewer/view_files.h), or render one view headless into a PNG (under xvfb-run without a screen).
 #include <CLI/CLI.hpp>
 
@@ -16,7 +16,7 @@ void add_view_command(CLI::App& app) {
   auto screenshot = std::make_shared<std::string>();
   auto camera = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand("view", "Browse a mesh, a saved map or a run's output folder in the viewer");
-  auto* input = cmd->add_option("--input", *path, "mesh.ply, map.hfmap or a `run` output folder");
+  auto* input = cmd->add_option("--input", *path, "a .ply or .obj mesh, map.hfmap or a `run` output folder");
   cmd->add_option("path", *path, "the same as --input (either one)")->excludes(input);
   cmd->add_option("--screenshot", *screenshot, "render one view into this PNG and exit (headless)");
   cmd->add_option("--camera", *camera, "camera preset or file for the view (default: the run's, else ros)");

@@ -58,7 +58,12 @@ struct ReintegrationOptions {
   // 4; bench/results/backend.md), so the default keeps the accuracy and the spreading is the latency user's choice.
   int frames_after_loop = 16;
   int frames_after_loop_per_step = 16;
-  double memory_budget_mb = 2048.0;  // compressed images of every fused frame (keyframes.jpeg_quality for colour)
+  // Compressed images of the fused frames (keyframes.jpeg_quality for colour); beyond it the oldest are dropped
+  // (they stay fused at their last pose). 512 MiB holds ~1400 640x480 frames of the synthetic loop (~370 KiB
+  // each; real TUM / 7-Scenes frames compress smaller): on its 3000-frame session the same ATE and re-fusions as
+  // 2048 (after the first lap corrections move old frames by less than half a voxel), peak RSS 1376 -> 1123 MiB
+  // (bench/results/backend.md).
+  double memory_budget_mb = 512.0;
 
   void validate() const;  // hf::Error naming the bad field
 };

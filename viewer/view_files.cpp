@@ -8,6 +8,7 @@
 #include "fusion/mesh.h"
 #include "fusion/volume_io.h"
 #include "io/image_io.h"
+#include "io/mesh_file.h"
 #include "io/ply.h"
 #include "io/trajectory_io.h"
 #include "viewer/gl_context.h"
@@ -55,7 +56,7 @@ SE3 look_at_mesh(const TriangleMesh& mesh) {
 
 void view_files(const std::string& path, const ViewFilesOptions& options) {
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw Error(path + ": not found (expected mesh.ply, map.hfmap or a run's output folder)");
+  if (!fs::exists(path, ec)) throw Error(path + ": not found (expected a .ply or .obj mesh, map.hfmap or a run's output folder)");
   TriangleMesh mesh;
   Trajectory trajectory;
   std::optional<PinholeCamera> camera = options.camera;
@@ -66,8 +67,8 @@ void view_files(const std::string& path, const ViewFilesOptions& options) {
     if (fs::is_regular_file(fs::path(path) / "trajectory.txt", ec))
       trajectory = read_tum_trajectory((fs::path(path) / "trajectory.txt").string());
     if (!camera) camera = camera_from_report(path);
-  } else if (fs::path(path).extension() == ".ply") {
-    mesh = read_ply_mesh(path);
+  } else if (fs::path(path).extension() == ".ply" || fs::path(path).extension() == ".obj") {
+    mesh = read_mesh_file(path);
   } else {
     const fusion::Volume volume = fusion::load_volume(path);
     mesh = fusion::extract_mesh(volume.grid, volume.store);

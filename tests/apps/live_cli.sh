@@ -71,6 +71,11 @@ screenshot)
   timeout 60 xvfb-run -a env HF_VIEWER_NO_EGL=1 "$HF" view run --screenshot view.png > log 2>&1 ||
     fail "view --screenshot failed: $(cat log)"
   [ -s view.png ] || fail "view wrote no screenshot"
+  # A bare OBJ mesh (a head from head-features, a model's OBJ) as well: one quad, framed by the view.
+  printf 'v 0 0 1\nv 0.5 0 1\nv 0.5 0.5 1\nv 0 0.5 1\nf 1 2 3\nf 1 3 4\n' > quad.obj
+  timeout 60 xvfb-run -a env HF_VIEWER_NO_EGL=1 "$HF" view quad.obj --screenshot quad.png > log 2>&1 ||
+    fail "view of an OBJ mesh failed: $(cat log)"
+  [ -s quad.png ] || fail "view of an OBJ mesh wrote no screenshot"
   # Without any display: EGL's surfaceless platform renders where the build has it (viewer/gl_context.h); without
   # EGL (HF_VIEWER_NO_EGL=1 stands in for a build without it) one clear line and a non-zero exit.
   if env -u DISPLAY "$HF" view run --screenshot egl.png > log 2>&1; then
