@@ -14,33 +14,10 @@ shift || true
 parts=("$@")
 [[ ${#parts[@]} -gt 0 ]] || parts=(distortion depth_only)
 
-# fr1/rpy 0-269 from the two excerpts (contiguous), as scripts/bench_tracking.sh does.
+bench_fr1_rpy_0_269        # $work/tum_fr1_rpy_frames0_269
 joined="$work/tum_fr1_rpy_frames0_269"
-mkdir -p "$joined/rgb" "$joined/depth"
-for d in tum_fr1_rpy_first150 tum_fr1_rpy_frames150_269; do
-  ln -s "$(realpath "$shared/$d")"/rgb/* "$joined/rgb/"
-  ln -s "$(realpath "$shared/$d")"/depth/* "$joined/depth/"
-done
-for list in rgb depth; do
-  { grep '^#' "$shared/tum_fr1_rpy_first150/$list.txt"
-    grep -hv '^#' "$shared/tum_fr1_rpy_first150/$list.txt" "$shared/tum_fr1_rpy_frames150_269/$list.txt"; } \
-    > "$joined/$list.txt"
-done
-cp "$shared/tum_fr1_rpy_first150/groundtruth.txt" "$joined/"
-# 7-Scenes halves (folders of links), as scripts/bench_colour_check.sh does.
+bench_seven_scenes_halves  # $work/7scenes_frames0_99, $work/7scenes_frames100_199
 seven="$(realpath "$shared/7scenes_tsdf_fusion_first200")"
-for part in "0 99" "100 199"; do
-  set -- $part
-  d="$work/7scenes_frames$1_$2"
-  mkdir -p "$d"
-  cp "$seven/camera-intrinsics.txt" "$d/"
-  files=()
-  for i in $(seq "$1" "$2"); do
-    f="$(printf 'frame-%06d' "$i")"
-    files+=("$seven/$f.color.jpg" "$seven/$f.depth.png" "$seven/$f.pose.txt")
-  done
-  ln -s -t "$d" "${files[@]}"
-done
 printf 'fx 517.3\nfy 516.5\ncx 318.6\ncy 255.3\nwidth 640\nheight 480\n' > "$work/fr1_pinhole.txt"
 
 for part in "${parts[@]}"; do

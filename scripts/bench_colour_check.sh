@@ -8,18 +8,8 @@ set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 source scripts/bench_lib.sh
 bench_init bench_colour_check "${1:-out/bench_colour_check}"
-# 7-Scenes in two halves (folders of links; the reader takes any frame-NNNNNN run).
+bench_seven_scenes_halves  # $work/7scenes_frames0_99, $work/7scenes_frames100_199
 seven="$(realpath "$shared/7scenes_tsdf_fusion_first200")"
-for part in "0 99" "100 199"; do
-  set -- $part
-  d="$work/7scenes_frames$1_$2"
-  mkdir -p "$d"
-  cp "$seven/camera-intrinsics.txt" "$d/"
-  for i in $(seq "$1" "$2"); do
-    f="$(printf 'frame-%06d' "$i")"
-    for e in color.jpg depth.png pose.txt; do ln -s "$seven/$f.$e" "$d/$f.$e"; done
-  done
-done
 echo '{"colour_check": {"enabled": false}}' > "$work/off.json"
 inputs=(
   "$shared/tum_fr1_rpy_first150" "$shared/tum_fr1_rpy_frames150_269" "$shared/tum_fr1_desk_9frames"

@@ -31,3 +31,37 @@ bench_input_name() {
   name="$(basename "$1")"
   echo "${name/synthetic:/synthetic_}"
 }
+
+# bench_fr1_rpy_0_269: fr1/rpy frames 0-269 joined from ../shared's two contiguous excerpts into
+# $work/tum_fr1_rpy_frames0_269 (links, lists joined; the first excerpt's groundtruth.txt covers both).
+bench_fr1_rpy_0_269() {
+  local joined="$work/tum_fr1_rpy_frames0_269" d list
+  mkdir -p "$joined/rgb" "$joined/depth"
+  for d in tum_fr1_rpy_first150 tum_fr1_rpy_frames150_269; do
+    ln -s "$(realpath "$shared/$d")"/rgb/* "$joined/rgb/"
+    ln -s "$(realpath "$shared/$d")"/depth/* "$joined/depth/"
+  done
+  for list in rgb depth; do
+    { grep '^#' "$shared/tum_fr1_rpy_first150/$list.txt"
+      grep -hv '^#' "$shared/tum_fr1_rpy_first150/$list.txt" "$shared/tum_fr1_rpy_frames150_269/$list.txt"; } \
+      > "$joined/$list.txt"
+  done
+  cp "$shared/tum_fr1_rpy_first150/groundtruth.txt" "$joined/"
+}
+
+# bench_seven_scenes_halves: 7-Scenes frames 0-99 and 100-199 as $work/7scenes_frames0_99 and
+# $work/7scenes_frames100_199 (links under their own names; the reader takes any frame-NNNNNN run).
+bench_seven_scenes_halves() {
+  local seven d first last i f
+  seven="$(realpath "$shared/7scenes_tsdf_fusion_first200")"
+  for first in 0 100; do
+    last=$((first + 99))
+    d="$work/7scenes_frames${first}_${last}"
+    mkdir -p "$d"
+    cp "$seven/camera-intrinsics.txt" "$d/"
+    for i in $(seq "$first" "$last"); do
+      f="$(printf 'frame-%06d' "$i")"
+      ln -s -t "$d" "$seven/$f.color.jpg" "$seven/$f.depth.png" "$seven/$f.pose.txt"
+    done
+  done
+}

@@ -8,19 +8,8 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 source scripts/bench_lib.sh
 bench_init bench_tracking "${1:-out/bench_tracking}"
 
-# fr1/rpy 0-269 from the two excerpts.
+bench_fr1_rpy_0_269  # $work/tum_fr1_rpy_frames0_269
 joined="$work/tum_fr1_rpy_frames0_269"
-mkdir -p "$joined/rgb" "$joined/depth"
-for d in tum_fr1_rpy_first150 tum_fr1_rpy_frames150_269; do
-  ln -s "$(realpath "$shared/$d")"/rgb/* "$joined/rgb/"
-  ln -s "$(realpath "$shared/$d")"/depth/* "$joined/depth/"
-done
-for list in rgb depth; do
-  { grep '^#' "$shared/tum_fr1_rpy_first150/$list.txt"
-    grep -hv '^#' "$shared/tum_fr1_rpy_first150/$list.txt" "$shared/tum_fr1_rpy_frames150_269/$list.txt"; } \
-    > "$joined/$list.txt"
-done
-cp "$shared/tum_fr1_rpy_first150/groundtruth.txt" "$joined/"
 echo '{"loop_closure": {"enabled": false}}' > "$work/off.json"
 
 inputs=(
