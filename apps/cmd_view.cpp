@@ -1,5 +1,5 @@
-// `hashfusion view mesh.ply | mesh.obj | map.hfmap | OUTDIR [--screenshot FILE.png]`: browse a result in the OpenGL viewer
-// (viewer/view_files.h), or render one view headless into a PNG (under xvfb-run without a screen).
+// `hashfusion view mesh.ply | mesh.obj | map.hfmap | OUTDIR [--screenshot FILE.png]`: browse a result in the
+// OpenGL viewer (viewer/view_files.h), or render one view headless into a PNG (under xvfb-run without a screen).
 #include <CLI/CLI.hpp>
 
 #include "apps/commands.h"

@@ -138,8 +138,8 @@ install(FILES ${PROJECT_BINARY_DIR}/hashfusionConfig.cmake ${PROJECT_BINARY_DIR}
 # hf_header_bundle(REL OUT): which precompiled bundle the header check may give header REL (relative to the
 # source root): "eigen_geometry" when its include closure (its own #include lines and, recursively, those of the
 # project's headers it includes) names <Eigen/Geometry> or <Eigen/Dense>, "eigen_core" when it names another
-# Eigen module (each includes Core), else "plain". Includes are read as written, conditional ones too: no public header includes Eigen
-# under an #if (a header that did would be held to the unconditional case, the stricter one for the check).
+# Eigen module (each includes Core), else "plain". Includes are read as written, conditional ones too: no public
+# header includes Eigen under an #if.
 function(hf_header_closure_angles rel out)
   get_property(done GLOBAL PROPERTY hf_closure_done_${rel} SET)
   if(done)

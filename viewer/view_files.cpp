@@ -56,7 +56,8 @@ SE3 look_at_mesh(const TriangleMesh& mesh) {
 
 void view_files(const std::string& path, const ViewFilesOptions& options) {
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw Error(path + ": not found (expected a .ply or .obj mesh, map.hfmap or a run's output folder)");
+  if (!fs::exists(path, ec))
+    throw Error(path + ": not found (expected a .ply or .obj mesh, map.hfmap or a run's output folder)");
   TriangleMesh mesh;
   Trajectory trajectory;
   std::optional<PinholeCamera> camera = options.camera;
