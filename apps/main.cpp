@@ -13,6 +13,7 @@
 #include "apps/interrupt.h"
 #include "apps/invocation.h"
 #include "core/error.h"
+#include "core/memory_policy.h"
 
 namespace {
 
@@ -34,6 +35,7 @@ std::string one_line(std::string text) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  hf::keep_freed_memory_for_reuse();  // first, before any thread or buffer exists (core/memory_policy.h)
   hf::apps::record_invocation(argc, argv);
   CLI::App app{"hashfusion: voxel-hashed RGB-D SLAM and 3D reconstruction"};
   app.require_subcommand(1);
