@@ -311,6 +311,7 @@ IntegrateStats integrate(VoxelBlockGrid& grid, const DepthImage& depth, const Co
   detail::check_frame_sizes(depth, colour, camera);
   IntegrateStats stats;
   const VolumeParams& volume = grid.params();
+  grid.free_retired_tables();  // the grid is ours alone here: no reader can still probe the arrays growth retired
 
   // Phase 1: allocation along the rays' truncation bands.
   auto t0 = std::chrono::steady_clock::now();

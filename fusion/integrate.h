@@ -21,7 +21,8 @@
 // Frames: T_world_camera maps camera points to world (the pose of the camera). Units: metres.
 // Errors: hf::Error when the depth/colour sizes do not match the camera; CapacityError when the pool is full
 // (the frame is then partly allocated but no voxel has been updated).
-// Thread-safety: one integrate() per grid at a time; it uses all cores itself.
+// Thread-safety: one integrate() per grid at a time, with no other reader of the grid meanwhile (it frees the hash
+// arrays that growth retired: VoxelBlockGrid::free_retired_tables); it uses all cores itself.
 #pragma once
 
 #include <cstddef>

@@ -27,7 +27,7 @@ namespace hf::fusion {
 
 BlockLookup::BlockLookup(const std::vector<std::pair<BlockCoord, const VoxelBlock*>>& blocks,
                          const std::vector<std::uint8_t>* surface_free)
-    : table_(blocks.size()), regions_(blocks.size()) {
+    : table_(blocks.size(), blocks.size()), regions_(blocks.size(), blocks.size()) {
   if (surface_free != nullptr && surface_free->size() != blocks.size())
     throw Error("BlockLookup: " + std::to_string(surface_free->size()) + " surface_free flags for " +
                 std::to_string(blocks.size()) + " blocks");

@@ -181,11 +181,13 @@ void VoxelBlockGrid::clear() {
   impl_->next_slot = 0;
 }
 
+size_t VoxelBlockGrid::free_retired_tables() { return impl_->table.reclaim() + impl_->regions.reclaim(); }
+
 size_t VoxelBlockGrid::block_count() const { return impl_->table.size(); }
 
 size_t VoxelBlockGrid::memory_bytes() const {
-  // Blocks in use, their per-slot flag and coordinate, and the two hash tables (their whole arrays: calloc'd zero
-  // pages cost nothing until touched, so this is an upper bound).
+  // Blocks in use, their per-slot flag and coordinate, and the two hash tables' live arrays (sized to the map, at
+  // load 0.25 to 0.5 once grown).
   return block_count() * (sizeof(VoxelBlock) + sizeof(std::uint8_t) + sizeof(BlockCoord)) + impl_->table.bytes() +
          impl_->regions.bytes();
 }

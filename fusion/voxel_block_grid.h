@@ -6,8 +6,8 @@
 //
 // Memory: blocks live in a pool of at most `capacity_blocks` VoxelBlocks, handed out in chunks of 1024 blocks as
 // they are needed (so memory follows the blocks in use, not the capacity); a hash table maps a BlockCoord to its
-// pool slot and a second one counts the blocks per region (fusion/block_hash_table.h: 16-byte entries, twice the
-// capacity each, zero pages until used: 8 MiB of address space at the default capacity). When the pool is full,
+// pool slot and a second one counts the blocks per region (fusion/block_hash_table.h: 16-byte entries, at least
+// twice the keys held, grown by doubling as the map grows, up to the capacity). When the pool is full,
 // allocate() throws CapacityError (typed, loud; the message says the capacity and how to raise it): never a
 // silent stop (InfiniTAM's failure mode). Streaming (fusion/streaming.h) moves distant blocks out of the pool to
 // make room.
@@ -114,9 +114,15 @@ class VoxelBlockGrid {
   bool release(const BlockCoord& c);
   void clear();
 
+  // Frees the hash arrays that growth retired (fusion/block_hash_table.h). Exclusive: no lock-free reader (find,
+  // region_occupied, voxel reads) may run concurrently. integrate() calls it first (it needs the grid to itself
+  // anyway), so a map that is fused keeps at most one frame's retired arrays. Returns the bytes freed.
+  size_t free_retired_tables();
+
   size_t block_count() const;
   size_t capacity_blocks() const { return params_.capacity_blocks; }
-  // Bytes held by allocated blocks (block_count() * sizeof(VoxelBlock)) and by the hash entries.
+  // Bytes held by allocated blocks (block_count() * sizeof(VoxelBlock)) and by the hash entries (the live arrays:
+  // sized to the blocks held, so this follows the map rather than the capacity).
   size_t memory_bytes() const;
 
   // Calls f(coord, block) for every allocated block, in block_coords() order (deterministic). f must not

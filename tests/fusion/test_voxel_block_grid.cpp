@@ -174,8 +174,61 @@ TEST(BlockHashTable, MatchesAMapThroughInsertsAndBackwardShiftErasures) {
   EXPECT_EQ(table.find(0, 0, 0), 0u);
 }
 
+// Growth: a table starts with room for its initial keys and doubles at load 0.5, so its live array stays within
+// [2, 4] entries per key once grown (never more than the capacity asks: room() <= max_entries); keys survive each
+// rehash; retired arrays (halving sizes, so less than the live one in all) wait for reclaim(); reserve() grows
+// ahead; clear() returns to the initial room.
+TEST(BlockHashTable, GrowsByDoublingKeepsEveryKeyAndReclaimsRetiredArrays) {
+  BlockHashTable table(100000, 64);
+  EXPECT_EQ(table.room(), 64u);
+  EXPECT_EQ(table.bytes(), 128u * 16u);
+  for (int i = 0; i < 5000; ++i) {
+    ASSERT_TRUE(table.insert(i, -i, i / 7, std::uint32_t(i + 1)));
+    const size_t entries = table.bytes() / 16;
+    ASSERT_GE(entries, 2 * table.size()) << "load above 0.5 after " << i + 1 << " keys";
+    if (table.size() > 64) {
+      ASSERT_LE(entries, 4 * table.size()) << "grown more than one doubling ahead";
+    }
+  }
+  EXPECT_EQ(table.bytes(), 16384u * 16u);  // 5000 keys: 8192 entries hold 4096, so 16384
+  EXPECT_EQ(table.retired_bytes(), (128u + 256 + 512 + 1024 + 2048 + 4096 + 8192) * 16u);
+  EXPECT_LT(table.retired_bytes(), table.bytes());
+  for (int i = 0; i < 5000; ++i) ASSERT_EQ(table.find(i, -i, i / 7), std::uint32_t(i + 1));
+  EXPECT_EQ(table.reclaim(), (128u + 256 + 512 + 1024 + 2048 + 4096 + 8192) * 16u);
+  EXPECT_EQ(table.retired_bytes(), 0u);
+  table.reserve(20000);
+  EXPECT_EQ(table.bytes(), 65536u * 16u);
+  for (int i = 0; i < 5000; ++i) ASSERT_EQ(table.find(i, -i, i / 7), std::uint32_t(i + 1));
+  table.clear();
+  EXPECT_EQ(table.room(), 64u);
+  EXPECT_EQ(table.retired_bytes(), 0u);
+  EXPECT_EQ(table.find(1, -1, 0), 0u);
+  // The capacity caps growth: a table for 100 keys never holds a 101st, nor grows past 256 entries.
+  BlockHashTable small(100, 16);
+  for (int i = 0; i < 100; ++i) ASSERT_TRUE(small.insert(i, 0, 0, 1));
+  EXPECT_FALSE(small.insert(100, 0, 0, 1));
+  EXPECT_EQ(small.room(), 100u);
+  EXPECT_EQ(small.bytes(), 256u * 16u);
+}
+
+// The grid's tables follow the map, not the capacity: a default-capacity grid (131072 blocks) holding 3000 blocks
+// reports hash bytes for ~3000 keys (8192 entries for the blocks, the initial 4096 for their 60 regions, 16 bytes
+// each), where tables sized to the capacity held 2 x 262144 entries (8 MiB); free_retired_tables() returns what
+// growth retired (the blocks' first 4096-entry array).
+TEST(VoxelBlockGrid, HashTablesAreSizedToTheMap) {
+  VoxelBlockGrid grid(VolumeParams{});
+  for (int i = 0; i < 3000; ++i) grid.allocate({i % 20, (i / 20) % 15, i / 300});
+  const size_t per_block = sizeof(VoxelBlock) + sizeof(std::uint8_t) + sizeof(BlockCoord);
+  const size_t table_bytes = grid.memory_bytes() - 3000 * per_block;
+  EXPECT_LE(table_bytes, (8192u + 4096u) * 16u);
+  EXPECT_EQ(grid.free_retired_tables(), 4096u * 16u);
+  EXPECT_EQ(grid.free_retired_tables(), 0u);
+  for (int i = 0; i < 3000; ++i) ASSERT_NE(grid.find({i % 20, (i / 20) % 15, i / 300}), nullptr);
+}
+
 // find() needs no lock: readers looking keys up while a writer inserts see each key either absent or with its own
-// value (a torn entry would show another key's value), and every key once the writer is done.
+// value (a torn entry would show another key's value), and every key once the writer is done. The table starts
+// small, so the readers also probe arrays that growth has retired under them.
 TEST(BlockHashTable, ReadersDuringInsertsSeeWholeEntries) {
   constexpr int kKeys = 20000;
   BlockHashTable table(kKeys);
@@ -196,6 +249,7 @@ TEST(BlockHashTable, ReadersDuringInsertsSeeWholeEntries) {
   done = true;
   for (auto& r : readers) r.join();
   EXPECT_EQ(wrong.load(), 0);
+  EXPECT_GT(table.retired_bytes(), 0u);  // it grew while they read
   for (int i = 0; i < kKeys; ++i) ASSERT_EQ(table.find(i % 31, (i / 31) % 29, i / (31 * 29)), value_of(i));
 }
 
