@@ -76,6 +76,6 @@ endif()
 message(STATUS "package test: an unknown component fails find_package, named: ok")
 if(PYTHON AND PYTHON_DIR)
   step("python import" ${CMAKE_COMMAND} -E env PYTHONPATH=${prefix}/${PYTHON_DIR} ${PYTHON} -c
-       "import hashfusion as hf; assert hf.__file__.startswith('${prefix}'), hf.__file__; print(hf.__file__)")
+       "import hashfusion as hf; assert hf.__file__.startswith('${prefix}'), hf.__file__; hf.to_open3d, hf.PointCloud; print(hf.__file__)")
   message(STATUS "${step_output}")
 endif()
