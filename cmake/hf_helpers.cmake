@@ -1,13 +1,13 @@
 # hf_library(NAME SOURCES... DEPS ...): one library target per source folder, our warnings, the repo root on the
 # include path so every include reads "core/se3.h", "io/ply.h", ... Every such library is listed in the global
 # property HF_LIBRARIES, from which cmake/hf_package.cmake installs and exports it (hashfusion::NAME without "hf_",
-# headers under include/hashfusion). With HF_LIBRARIES_PIC the objects are position-independent, so the Python
-# module (a shared object) can link them.
+# headers under include/hashfusion, included there as <hashfusion/core/se3.h>; the installed include folder is set
+# by hf_package.cmake). With HF_LIBRARIES_PIC the objects are position-independent, so the Python module (a shared
+# object) can link them.
 function(hf_library name)
   cmake_parse_arguments(A "" "" "SOURCES;DEPS" ${ARGN})
   add_library(${name} STATIC ${A_SOURCES})
-  target_include_directories(${name} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}>
-                                            $<INSTALL_INTERFACE:include/hashfusion>)
+  target_include_directories(${name} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}>)
   target_link_libraries(${name} PUBLIC ${A_DEPS} PRIVATE $<BUILD_INTERFACE:hf_warnings>)
   if(HF_LIBRARIES_PIC)
     # -fPIC alone would make every function interposable (no inlining across them); nothing interposes ours.

@@ -1,15 +1,24 @@
-# Install rules and the CMake package (issue 24), included by CMakeLists.txt once every library folder is added.
+# Install rules and the CMake package (issues 24, 36), included by CMakeLists.txt once every library folder is added.
 #
 #   cmake --install build/release --prefix /opt/hashfusion
-#   find_package(hashfusion REQUIRED)   # in another project, with CMAKE_PREFIX_PATH=/opt/hashfusion
-#   target_link_libraries(app PRIVATE hashfusion::slam)
+#   find_package(hashfusion REQUIRED COMPONENTS fusion slam)   # CMAKE_PREFIX_PATH=/opt/hashfusion; no COMPONENTS: all
+#   target_link_libraries(app PRIVATE hashfusion::slam)        # #include <hashfusion/slam/pipeline.h>
 #
 # Every hf_library (global property HF_LIBRARIES) outside bench/ and tests/ is installed and exported as
-# hashfusion::NAME (NAME without "hf_": core, io, fusion, registration, slam, ...), with its folder's headers under
-# include/hashfusion (so includes read "core/se3.h" as in the tree). hashfusionConfig.cmake finds the packages the
-# exported targets link (find_dependency), derived from their link interfaces through HF_PACKAGE_OF below; a
-# library linking anything else (a target of another package, a plain library path) stays out of the package,
-# with a configure message naming it (add its package there to install it).
+# hashfusion::NAME (NAME without "hf_": core, io, fusion, registration, slam, ...) and is a component of the package
+# of the same NAME. Its folder's headers go under include/hashfusion, with their project includes rewritten at
+# install time from "core/se3.h" to <hashfusion/core/se3.h> (cmake/hf_install_headers.cmake), so the installed
+# tree is self-consistent and a consumer's own "core/se3.h" cannot shadow ours; consumers get include/ (the folder
+# whose child is hashfusion/) on their include path.
+#
+# Components: hashfusionConfig.cmake finds only the packages (find_dependency) of the requested components and of
+# the components they link, transitively: COMPONENTS core io finds Eigen, nlohmann_json, Threads, TBB and OpenCV's
+# core/imgproc/imgcodecs, not GDAL, Ceres, OpenCL or PCL. The packages of a library come from its link interface
+# through HF_PACKAGE_OF below; a library linking anything else (a target of another package, a plain library path)
+# stays out of the package, with what links it, and a configure message naming it (add its package there to
+# install it). Each group of libraries that link each other in a cycle (registration <-> registration_opencl)
+# shares one export file, hashfusion_GROUPTargets.cmake; the config includes the groups in dependency order. An
+# unknown component fails find_package with a message listing the known ones.
 # Left out on purpose: HF_PACKAGE_EXCLUDE (hf_io_pcl: PCL's package drags in VTK and MPI, shared/setup/NOTES.md).
 #
 # The public-header check: the object library hf_header_check compiles each installed header alone in its own
@@ -55,49 +64,143 @@ foreach(lib IN LISTS hf_all_libraries)
   list(APPEND hf_exported ${lib})
 endforeach()
 
-# The packages of the exported libraries' dependencies; a library with an unknown one is dropped (with what
-# depends on it).
-set(hf_dependencies)
-set(hf_opencv_components)
+# Each library's dependencies: hf_internal_LIB (our libraries), hf_packages_LIB (find_dependency arguments, one
+# list element each) and hf_opencv_LIB (OpenCV components). A library with an unknown one is dropped.
 foreach(lib IN LISTS hf_exported)
   hf_exported_link_items(${lib} items)
   set(unknown)
-  set(lib_dependencies)
-  set(lib_opencv)
+  set(hf_internal_${lib})
+  set(hf_packages_${lib})
+  set(hf_opencv_${lib})
   foreach(item IN LISTS items)
     if(item IN_LIST hf_all_libraries)
+      list(APPEND hf_internal_${lib} ${item})
       continue()
     elseif(item MATCHES "^opencv_(.*)$")
-      list(APPEND lib_opencv ${CMAKE_MATCH_1})
+      list(APPEND hf_opencv_${lib} ${CMAKE_MATCH_1})
+      continue()
     endif()
     set(package)
     if(item MATCHES "^([A-Za-z0-9_]+)::")
       set(package "${HF_PACKAGE_OF_${CMAKE_MATCH_1}}")
     endif()
     if(package)
-      list(APPEND lib_dependencies "${package}")
-    elseif(NOT item MATCHES "^opencv_")
+      list(APPEND hf_packages_${lib} "${package}")
+    else()
       list(APPEND unknown ${item})
     endif()
   endforeach()
   if(unknown)
     message(STATUS "hf_package: ${lib} is not installed: it links ${unknown}, of no package in HF_PACKAGE_OF_*")
     list(REMOVE_ITEM hf_exported ${lib})
-  else()
-    list(APPEND hf_dependencies ${lib_dependencies})
-    list(APPEND hf_opencv_components ${lib_opencv})
   endif()
 endforeach()
-list(REMOVE_DUPLICATES hf_dependencies)
-list(REMOVE_DUPLICATES hf_opencv_components)
-set(HF_FIND_DEPENDENCIES "")
-foreach(dep IN LISTS hf_dependencies)
-  string(APPEND HF_FIND_DEPENDENCIES "find_dependency(${dep})\n")
+# ... and so is every library linking a dropped one (an export cannot name a target that is not installed).
+set(hf_dropping TRUE)
+while(hf_dropping)
+  set(hf_dropping FALSE)
+  foreach(lib IN LISTS hf_exported)
+    foreach(dep IN LISTS hf_internal_${lib})
+      if(NOT dep IN_LIST hf_exported)
+        message(STATUS "hf_package: ${lib} is not installed: it links ${dep}, which is not")
+        list(REMOVE_ITEM hf_exported ${lib})
+        set(hf_dropping TRUE)
+        break()
+      endif()
+    endforeach()
+  endforeach()
+endwhile()
+
+# hf_closure_LIB: LIB and every library it links, transitively (to a fixed point; there are a dozen).
+foreach(lib IN LISTS hf_exported)
+  set(hf_closure_${lib} ${lib} ${hf_internal_${lib}})
+  list(REMOVE_DUPLICATES hf_closure_${lib})
 endforeach()
-if(hf_opencv_components)
-  list(JOIN hf_opencv_components " " components)
-  string(APPEND HF_FIND_DEPENDENCIES "find_dependency(OpenCV COMPONENTS ${components})\n")
-endif()
+set(hf_growing TRUE)
+while(hf_growing)
+  set(hf_growing FALSE)
+  foreach(lib IN LISTS hf_exported)
+    set(closure ${hf_closure_${lib}})
+    foreach(dep IN LISTS hf_closure_${lib})
+      list(APPEND closure ${hf_closure_${dep}})
+    endforeach()
+    list(REMOVE_DUPLICATES closure)
+    list(LENGTH closure n_new)
+    list(LENGTH hf_closure_${lib} n_old)
+    if(n_new GREATER n_old)
+      set(hf_closure_${lib} ${closure})
+      set(hf_growing TRUE)
+    endif()
+  endforeach()
+endwhile()
+
+# Groups: libraries that reach each other (a link cycle) share one export set, named after the first of them in
+# folder order. hf_group_LIB is LIB's group; a group's libraries all have the same closure, and a group that
+# links another has a strictly larger one, so sorting by closure size orders the groups by dependency.
+set(hf_groups)
+set(hf_group_keys)
+foreach(lib IN LISTS hf_exported)
+  foreach(other IN LISTS hf_exported)
+    if(other IN_LIST hf_closure_${lib} AND lib IN_LIST hf_closure_${other})
+      string(REGEX REPLACE "^hf_" "" hf_group_${lib} ${other})
+      break()
+    endif()
+  endforeach()
+  set(group ${hf_group_${lib}})
+  list(APPEND hf_group_libs_${group} ${lib})
+  if(NOT group IN_LIST hf_groups)
+    list(APPEND hf_groups ${group})
+    list(LENGTH hf_closure_${lib} n)
+    math(EXPR key "1000 + ${n}")  # fixed width, so the sort below is numeric
+    list(APPEND hf_group_keys "${key}:${group}")
+  endif()
+endforeach()
+list(SORT hf_group_keys)
+list(TRANSFORM hf_group_keys REPLACE "^[0-9]+:" "" OUTPUT_VARIABLE hf_groups_in_order)
+
+# The package's component table, written into hashfusionConfig.cmake (HF_COMPONENT_TABLE):
+#   _hf_components           every component (= exported library) name
+#   _hf_group_<component>    its export group
+#   _hf_groups               the groups in dependency order
+#   _hf_needs_<group>        the groups it needs, itself included
+#   _hf_packages_<group>     find_dependency() arguments of its libraries, one list element each
+#   _hf_opencv_<group>       OpenCV components its libraries link
+set(hf_components)
+foreach(lib IN LISTS hf_exported)
+  string(REGEX REPLACE "^hf_" "" name ${lib})
+  list(APPEND hf_components ${name})
+endforeach()
+string(REPLACE ";" " " text "${hf_components}")
+set(HF_COMPONENT_TABLE "set(_hf_components ${text})\n")
+foreach(lib IN LISTS hf_exported)
+  string(REGEX REPLACE "^hf_" "" name ${lib})
+  string(APPEND HF_COMPONENT_TABLE "set(_hf_group_${name} ${hf_group_${lib}})\n")
+endforeach()
+string(REPLACE ";" " " text "${hf_groups_in_order}")
+string(APPEND HF_COMPONENT_TABLE "set(_hf_groups ${text})\n")
+foreach(group IN LISTS hf_groups_in_order)
+  set(needs)
+  set(packages)
+  set(opencv)
+  foreach(lib IN LISTS hf_group_libs_${group})
+    foreach(dep IN LISTS hf_closure_${lib})
+      list(APPEND needs ${hf_group_${dep}})
+    endforeach()
+    list(APPEND packages ${hf_packages_${lib}})
+    list(APPEND opencv ${hf_opencv_${lib}})
+  endforeach()
+  foreach(var needs packages opencv)
+    list(REMOVE_DUPLICATES ${var})
+  endforeach()
+  string(REPLACE ";" " " needs "${needs}")
+  list(TRANSFORM packages PREPEND "\"")
+  list(TRANSFORM packages APPEND "\"")
+  string(REPLACE ";" " " packages "${packages}")
+  string(REPLACE ";" " " opencv "${opencv}")
+  string(APPEND HF_COMPONENT_TABLE "set(_hf_needs_${group} ${needs})\n"
+                                   "set(_hf_packages_${group} ${packages})\n"
+                                   "set(_hf_opencv_${group} ${opencv})\n")
+endforeach()
 
 # Libraries and their headers.
 set(hf_public_headers)
@@ -109,12 +212,27 @@ foreach(lib IN LISTS hf_exported)
   list(APPEND hf_public_headers ${headers})
 endforeach()
 list(REMOVE_DUPLICATES hf_public_headers)
+# The headers are copied by a script at install time (their includes rewritten to <hashfusion/...>), from this
+# list of paths relative to the source root.
+set(hf_header_list)
 foreach(header IN LISTS hf_public_headers)
   file(RELATIVE_PATH rel ${PROJECT_SOURCE_DIR} ${header})
-  get_filename_component(rel_dir ${rel} DIRECTORY)
-  install(FILES ${header} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/hashfusion/${rel_dir})
+  list(APPEND hf_header_list ${rel})
 endforeach()
-install(TARGETS ${hf_exported} EXPORT hashfusionTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
+list(JOIN hf_header_list "\n" text)
+file(CONFIGURE OUTPUT ${PROJECT_BINARY_DIR}/hf_installed_headers.txt CONTENT "${text}\n")
+install(CODE "
+  set(HF_SOURCE_DIR [==[${PROJECT_SOURCE_DIR}]==])
+  set(HF_HEADER_LIST [==[${PROJECT_BINARY_DIR}/hf_installed_headers.txt]==])
+  set(HF_STAGING_DIR [==[${PROJECT_BINARY_DIR}/hf_install_headers]==])
+  set(HF_INCLUDE_DIR [==[${CMAKE_INSTALL_INCLUDEDIR}]==])
+  include([==[${PROJECT_SOURCE_DIR}/cmake/hf_install_headers.cmake]==])")
+set(hf_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/hashfusion)
+foreach(group IN LISTS hf_groups_in_order)
+  install(TARGETS ${hf_group_libs_${group}} EXPORT hashfusion_${group}Targets
+          ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  install(EXPORT hashfusion_${group}Targets NAMESPACE hashfusion:: DESTINATION ${hf_cmake_dir})
+endforeach()
 # Everything `cmake --install` copies, as one target: the demo (scripts/demo.sh) builds it, so the install works
 # after the README's first command as after a full build (issue 36; `cmake --install` builds nothing itself).
 add_custom_target(hf_installable)
@@ -126,14 +244,13 @@ endforeach()
 if(TARGET hashfusion)
   install(TARGETS hashfusion RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 endif()
-set(hf_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/hashfusion)
-install(EXPORT hashfusionTargets NAMESPACE hashfusion:: DESTINATION ${hf_cmake_dir})
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/hashfusionConfig.cmake.in
                               ${PROJECT_BINARY_DIR}/hashfusionConfig.cmake INSTALL_DESTINATION ${hf_cmake_dir})
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/hashfusionConfigVersion.cmake
                                  COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/hashfusionConfig.cmake ${PROJECT_BINARY_DIR}/hashfusionConfigVersion.cmake
         DESTINATION ${hf_cmake_dir})
+
 
 # hf_header_bundle(REL OUT): which precompiled bundle the header check may give header REL (relative to the
 # source root): "eigen_geometry" when its include closure (its own #include lines and, recursively, those of the

@@ -6,16 +6,19 @@
     for frame in data:                                        # frame.depth float32 (H, W) metres, frame.color uint8
         result = pipeline.process(frame)                      # result.state, result.T_world_camera (4x4) ...
     mesh = pipeline.extract_mesh()                            # mesh.vertices, mesh.faces, mesh.colors
+    o3d_mesh = hf.to_open3d(mesh)                             # with python3-open3d; hf.from_open3d back
 
 Conventions (as in the C++ library): poses are 4x4 float64 arrays named by their frames (T_world_camera maps
 camera points into the world), metres everywhere, trajectories are (stamps (N,), poses (N, 4, 4)) pairs or TUM
 file paths, configurations are dicts with the keys of report.json's "config". Depth goes in as float32 metres or
 as uint16 with depth_scale (units per metre, Open3D's convention: 1000 for millimetres, 5000 for TUM). C++ errors
 arrive as hashfusion.Error (ParseError, CapacityError) with the C++ message, bad arguments as ValueError, a
-missing file or folder as FileNotFoundError.
+missing file or folder as FileNotFoundError. hf.to_open3d / hf.from_open3d convert Camera, Mesh and PointCloud
+to and from Open3D's PinholeCameraIntrinsic, TriangleMesh and PointCloud (python/hashfusion/_open3d.py).
 """
 from ._hashfusion import *  # noqa: F401,F403
 from ._hashfusion import Dataset, Error, ParseError, CapacityError, __version__  # noqa: F401
+from ._open3d import to_open3d, from_open3d  # noqa: F401  (Open3D itself is imported on the first call)
 
 
 class DatasetView:

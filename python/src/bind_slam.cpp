@@ -338,6 +338,12 @@ void bind_pipeline(py::module_& m) {
            "ground-truth pose, else at the map's origin; the configuration's voxel size must be the map's")
       .def("extract_mesh",
            [](Pipeline& p) { return unlocked(p.mutex, [&] { return p.pipeline->extract_mesh(); }); })
+      .def("extract_cloud",
+           [](Pipeline& p) {
+             return unlocked(p.mutex, [&] { return slam::surface_cloud(p.pipeline->extract_mesh()); });
+           },
+           "the surface as a PointCloud: the mesh's vertices with colour and normals (what `run --save-cloud` "
+           "writes)")
       .def("render",
            [](Pipeline& p, const py::object& pose) {
              const SE3 T = se3_from_array(pose, "T_world_camera");

@@ -155,14 +155,23 @@ py::array_t<Scalar> rows_view(const std::vector<T>& rows, py::handle owner) {
                              reinterpret_cast<const Scalar*>(rows.data()), owner);
 }
 
+// An (N, 3) array of `type` ("Mesh", "PointCloud") argument `what`, converted to Scalar.
 template <class T, class Scalar>
-std::vector<T> rows_from(const py::handle& h, const char* what) {
+std::vector<T> rows_from(const py::handle& h, const char* type, const char* what) {
   auto a = py::array_t<Scalar, py::array::c_style | py::array::forcecast>::ensure(h);
   if (!a || a.ndim() != 2 || a.shape(1) != 3)
-    throw ValueError(std::string("Mesh: ") + what + " must be an (N, 3) array");
+    throw ValueError(std::string(type) + ": " + what + " must be an (N, 3) array");
   std::vector<T> rows(size_t(a.shape(0)));
   if (!rows.empty()) std::memcpy(static_cast<void*>(rows.data()), a.data(), rows.size() * sizeof(T));
   return rows;
+}
+
+// Colours are uint8 only: a float array in [0, 1] cast to uint8 would silently become black.
+std::vector<Rgb8> colors_from(const py::object& colors, const char* type) {
+  py::array c = py::array::ensure(colors);
+  if (!c || !c.dtype().is(py::dtype::of<std::uint8_t>()))
+    throw ValueError(std::string(type) + ": colors must be a uint8 (N, 3) array");
+  return rows_from<Rgb8, std::uint8_t>(c, type, "colors");
 }
 
 void bind_mesh(py::module_& m) {
@@ -172,15 +181,10 @@ void bind_mesh(py::module_& m) {
       .def(py::init([](const py::object& vertices, const py::object& faces, const py::object& colors,
                        const py::object& normals) {
              TriangleMesh mesh;
-             mesh.vertices = rows_from<Eigen::Vector3f, float>(vertices, "vertices");
-             mesh.triangles = rows_from<Eigen::Vector3i, int>(faces, "faces");
-             if (!colors.is_none()) {
-               py::array c = py::array::ensure(colors);
-               if (!c || !c.dtype().is(py::dtype::of<std::uint8_t>()))
-                 throw ValueError("Mesh: colors must be a uint8 (N, 3) array");
-               mesh.colors = rows_from<Rgb8, std::uint8_t>(c, "colors");
-             }
-             if (!normals.is_none()) mesh.normals = rows_from<Eigen::Vector3f, float>(normals, "normals");
+             mesh.vertices = rows_from<Eigen::Vector3f, float>(vertices, "Mesh", "vertices");
+             mesh.triangles = rows_from<Eigen::Vector3i, int>(faces, "Mesh", "faces");
+             if (!colors.is_none()) mesh.colors = colors_from(colors, "Mesh");
+             if (!normals.is_none()) mesh.normals = rows_from<Eigen::Vector3f, float>(normals, "Mesh", "normals");
              mesh.validate();
              return mesh;
            }),
@@ -211,6 +215,44 @@ void bind_mesh(py::module_& m) {
         py::arg("path"), "reads a PLY (ASCII or binary) or OBJ mesh, by the file's extension");
 }
 
+void bind_point_cloud(py::module_& m) {
+  py::class_<PointCloud>(m, "PointCloud",
+                         "Point cloud: points float32 (N, 3) metres, colors uint8 (N, 3) or (0, 3), normals float32 "
+                         "(N, 3) or (0, 3); views, no copies")
+      .def(py::init([](const py::object& points, const py::object& colors, const py::object& normals) {
+             PointCloud cloud;
+             cloud.positions = rows_from<Eigen::Vector3f, float>(points, "PointCloud", "points");
+             if (!colors.is_none()) cloud.colors = colors_from(colors, "PointCloud");
+             if (!normals.is_none())
+               cloud.normals = rows_from<Eigen::Vector3f, float>(normals, "PointCloud", "normals");
+             cloud.validate();
+             return cloud;
+           }),
+           py::arg("points"), py::arg("colors") = py::none(), py::arg("normals") = py::none())
+      .def_property_readonly("points", [](py::object s) {
+        return rows_view<Eigen::Vector3f, float>(s.cast<PointCloud&>().positions, s);
+      })
+      .def_property_readonly("colors", [](py::object s) {
+        return rows_view<Rgb8, std::uint8_t>(s.cast<PointCloud&>().colors, s);
+      })
+      .def_property_readonly("normals", [](py::object s) {
+        return rows_view<Eigen::Vector3f, float>(s.cast<PointCloud&>().normals, s);
+      })
+      .def("__len__", &PointCloud::size)
+      .def("save", [](const PointCloud& cloud, const std::string& path) { write_ply(path, cloud); }, py::arg("path"),
+           "binary PLY, written atomically")
+      .def("__repr__", [](const PointCloud& cloud) {
+        return "hashfusion.PointCloud(" + std::to_string(cloud.size()) + " points" +
+               (cloud.has_colors() ? ", colors" : "") + (cloud.has_normals() ? ", normals" : "") + ")";
+      });
+  m.def("load_point_cloud",
+        [](const std::string& path) {
+          require_existing_path(path, "load_point_cloud");
+          return read_ply_point_cloud(path);
+        },
+        py::arg("path"), "reads a PLY point cloud (ASCII or binary; a mesh's vertices when it has faces)");
+}
+
 void bind_trajectory(py::module_& m) {
   m.def("read_trajectory",
         [](const std::string& path) {
@@ -237,6 +279,7 @@ PYBIND11_MODULE(_hashfusion, m) {
   bind_se3(m);
   bind_frame(m);
   bind_mesh(m);
+  bind_point_cloud(m);
   bind_trajectory(m);
   bind_slam(m);
   bind_head(m);

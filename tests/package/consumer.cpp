@@ -4,11 +4,11 @@
 #include <cmath>
 #include <cstdio>
 
-#include "datasets/synthetic_sequence.h"
-#include "fusion/integrate.h"
-#include "fusion/mesh.h"
-#include "fusion/voxel_block_grid.h"
-#include "slam/eval.h"
+#include <hashfusion/datasets/synthetic_sequence.h>
+#include <hashfusion/fusion/integrate.h>
+#include <hashfusion/fusion/mesh.h>
+#include <hashfusion/fusion/voxel_block_grid.h>
+#include <hashfusion/slam/eval.h>
 
 int main() {
   hf::datasets::SyntheticOptions options;
