@@ -177,7 +177,8 @@ cv::Mat with_color_bar(const cv::Mat& image, double lo, double hi, Rgb8 (*map)(d
   // caption row, bar, tick labels, then the extra swatches
   const int bar_x0 = kPad + legend_text_width(tick_label(lo, unit)) / 2;
   const int bar_x1 = W - kPad - legend_text_width(tick_label(hi, unit)) / 2;
-  if (bar_x1 - bar_x0 < 40) throw Error("legend: an image of " + std::to_string(W) + " px is too narrow for a colour bar");
+  if (bar_x1 - bar_x0 < 40)
+    throw Error("legend: an image of " + std::to_string(W) + " px is too narrow for a colour bar");
   const int caption_y = kPad + 14, bar_y = caption_y + 10, bar_h = 16, ticks_y = bar_y + bar_h + 20;
   const int extra_y = ticks_y + 6;
   const int h = extra_y + swatch_rows(nullptr, extra, W, kPad, extra_y) + kPad;

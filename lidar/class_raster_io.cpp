@@ -73,7 +73,8 @@ cv::Mat swatch_strip(int width, const Swatch (&entries)[N]) {
   for (const Swatch& e : entries) {
     cv::rectangle(bgr, cv::Rect(x0, 4, 16, 16), cv::Scalar(e.colour.b, e.colour.g, e.colour.r), cv::FILLED);
     cv::rectangle(bgr, cv::Rect(x0, 4, 16, 16), cv::Scalar(0, 0, 0), 1);
-    cv::putText(bgr, e.name, cv::Point(x0 + 20, 17), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    cv::putText(bgr, e.name, cv::Point(x0 + 20, 17), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1,
+                cv::LINE_AA);
     x0 += 20 + text_width(e.name) + 14;
   }
   return bgr;

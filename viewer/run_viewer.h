@@ -71,8 +71,8 @@ inline constexpr double kModelViewShare = 0.2;
 inline constexpr int kModelViewMaxPx = 640;
 
 // The raycast the model view uses: the defaults of fusion::RaycastOptions (shading and colour, shown as
-// fusion::colored_shading), rays out to 20 m (the free camera stands back from the scene) and the crossing refined to 0.05 voxel (the pipeline's tracking
-// raycast's tolerance: far below a pixel at any distance shown).
+// fusion::colored_shading), rays out to 20 m (the free camera stands back from the scene) and the crossing refined
+// to 0.05 voxel (the pipeline's tracking raycast's tolerance: far below a pixel at any distance shown).
 fusion::RaycastOptions model_view_options();
 
 // A screenshot path for frame `index`: "shots/v.png" -> "shots/v_000120.png".

@@ -61,8 +61,9 @@ Eigen::Matrix3d view_axes(const TriangleMesh& mesh) {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   double area = 0.0;
   for (const Eigen::Vector3i& t : mesh.triangles) {
-    const Eigen::Vector3d a = mesh.vertices[size_t(t[0])].cast<double>(), b = mesh.vertices[size_t(t[1])].cast<double>(),
-                          c = mesh.vertices[size_t(t[2])].cast<double>();
+    const Eigen::Vector3d a = mesh.vertices[size_t(t[0])].cast<double>();
+    const Eigen::Vector3d b = mesh.vertices[size_t(t[1])].cast<double>();
+    const Eigen::Vector3d c = mesh.vertices[size_t(t[2])].cast<double>();
     const Eigen::Vector3d n2 = (b - a).cross(c - a);  // twice the area along the normal
     const double a2 = n2.norm();
     if (!(a2 > 0.0)) continue;

@@ -241,7 +241,8 @@ TEST(FeatureOutputs, DivergingColourMap) {
 TEST(HeadRender, LegendsShowTheirColoursWithinTheWidth) {
   const cv::Mat image(60, 300, CV_8UC3, cv::Scalar(255, 255, 255));
   std::vector<LegendEntry> entries;
-  for (int k = 0; k < 9; ++k) entries.push_back({"entry number " + std::to_string(k), Rgb8{std::uint8_t(20 * k), 90, 200}});
+  for (int k = 0; k < 9; ++k)
+    entries.push_back({"entry number " + std::to_string(k), Rgb8{std::uint8_t(20 * k), 90, 200}});
   const cv::Mat swatches = with_swatch_legend(image, entries);
   ASSERT_EQ(swatches.cols, 300);
   ASSERT_GT(swatches.rows, 60 + 3 * 20) << "nine entries in 300 px take several rows";

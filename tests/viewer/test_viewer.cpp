@@ -326,7 +326,7 @@ TEST(Viewer, FrameMeshLooksFromTheScannedSideWithTheFloorDown) {
     const Eigen::Vector3f n_floor = to_world * Eigen::Vector3f(0, -1, 0), n_wall = to_world * Eigen::Vector3f(0, 0, -1);
     const hf::SE3 T = hf::viewer::frame_mesh(m, camera);
     const Eigen::Matrix3d R = T.rotation();  // columns: the camera's x, y (image down), z (forward) in the world
-    EXPECT_GT(R.col(1).dot(-n_floor.cast<double>()), 0.8) << "the floor's up is not the image's up (z_up " << z_up << ")";
+    EXPECT_GT(R.col(1).dot(-n_floor.cast<double>()), 0.8) << "the floor is not at the bottom (z_up " << z_up << ")";
     EXPECT_GT(R.col(2).dot(-n_wall.cast<double>()), 0.7) << "not seen from the scanned side (z_up " << z_up << ")";
   }
 }
