@@ -955,4 +955,22 @@ void raycast_pixels(const VoxelBlockGrid& grid, const PinholeCamera& camera, con
   out->hit_count = total;
 }
 
+ColorImage colored_shading(const RaycastResult& result) {
+  const ColorImage& shaded = result.shaded;
+  if (shaded.empty()) throw Error("colored_shading: the raycast has no shading (RaycastOptions::shade was off)");
+  const bool has_color = result.color.width() == shaded.width() && result.color.height() == shaded.height();
+  ColorImage out(shaded.width(), shaded.height());
+  for (size_t i = 0; i < shaded.size(); ++i) {
+    const Rgb8 g = shaded.pixels()[i];
+    const Rgb8 c = has_color ? result.color.pixels()[i] : Rgb8{};
+    if (c.r == 0 && c.g == 0 && c.b == 0) {
+      out.pixels()[i] = g;  // no colour fused here (or a miss, which is black in both)
+      continue;
+    }
+    const auto mod = [&](std::uint8_t channel) { return std::uint8_t((unsigned(channel) * g.r + 127u) / 255u); };
+    out.pixels()[i] = Rgb8{mod(c.r), mod(c.g), mod(c.b)};
+  }
+  return out;
+}
+
 }  // namespace hf::fusion

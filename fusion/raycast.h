@@ -136,4 +136,12 @@ RaycastResult raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, c
 void raycast(const VoxelBlockGrid& grid, const PinholeCamera& camera, const SE3& T_world_camera,
              const RaycastOptions& options, RaycastResult* out);
 
+// The render for people in the map's colours: per pixel the head-light shading modulated by the fused colour,
+// colour x shade / 255 per channel, so a surface facing the camera shows its fused colour and one at a grazing angle
+// darkens towards 0.2 of it (hf_headlight_shade's ambient). A hit whose colour is black keeps the grey shading: no
+// colour was fused there (a map integrated without colour images, carving-only voxels, options.color off). Misses
+// stay black. The viewer's GL mesh shader with vertex colours evaluates the same formula (viewer/mesh_renderer.h).
+// Needs a result raycast with options.shade (throws hf::Error on an empty `shaded`).
+ColorImage colored_shading(const RaycastResult& result);
+
 }  // namespace hf::fusion

@@ -19,6 +19,20 @@ namespace {
 const Rgb8 kAreaColors[kAreaCount] = {{200, 200, 200}, {90, 160, 255}, {60, 110, 220}, {80, 200, 120},
                                       {255, 150, 170}, {240, 200, 80},  {210, 160, 40}};
 const Rgb8 kFeatureColor{220, 30, 30};
+const Rgb8 kNotEvaluated{128, 128, 128};
+
+// features.png's legend: each important area's colour, the features' and the control points' markers.
+std::vector<LegendEntry> feature_legend() {
+  std::vector<LegendEntry> out;
+  for (int k = 0; k < kAreaCount; ++k)
+    out.push_back({k == 0 ? std::string("outside the areas") : std::string(area_name(static_cast<Area>(k))),
+                   kAreaColors[k]});
+  out.push_back({"feature", kFeatureColor});
+  out.push_back({"control point (marker)", Rgb8{0, 0, 0}});
+  return out;
+}
+
+Rgb8 diverging_bar(double v, double, double hi) { return diverging_color(v, hi); }
 
 struct Channel {
   const char* name;
@@ -68,7 +82,9 @@ void write_evaluations_ply(const std::string& path, const TriangleMesh& mesh, co
   write_file_atomically(path, [&](std::ostream& os) { os << body; }, true);
 }
 
-std::vector<Rgb8> color_map(const std::vector<float>& w, const VertexMask& valid) {
+// The diverging colours of `w` at its valid vertices, scaled to the 95th percentile of |w| (returned in *scale, so
+// the legend can label the bar); grey where not valid.
+std::vector<Rgb8> color_map(const std::vector<float>& w, const VertexMask& valid, double* scale_out = nullptr) {
   std::vector<float> mags;
   for (size_t i = 0; i < w.size(); ++i)
     if (valid[i]) mags.push_back(std::abs(w[i]));
@@ -78,9 +94,10 @@ std::vector<Rgb8> color_map(const std::vector<float>& w, const VertexMask& valid
     std::nth_element(mags.begin(), mags.begin() + static_cast<long>(k), mags.end());
     scale = mags[k];
   }
-  std::vector<Rgb8> out(w.size(), Rgb8{128, 128, 128});
+  std::vector<Rgb8> out(w.size(), kNotEvaluated);
   for (size_t i = 0; i < w.size(); ++i)
     if (valid[i]) out[i] = diverging_color(w[i], scale);
+  if (scale_out) *scale_out = scale;
   return out;
 }
 
@@ -235,11 +252,17 @@ void write_head_feature_outputs(const std::string& dir, const TriangleMesh& mesh
   std::vector<RenderMarker> markers;
   for (const ControlPoint& c : r.control_points) markers.push_back({c.position, {0, 0, 0}, ""});
   const RenderOptions ro{.width_px = 600, .height_px = 600};
-  write_png(base + "features.png", render_views(mesh, views(r.frame), colored.colors, markers, ro));
+  write_png(base + "features.png",
+            with_swatch_legend(render_views(mesh, views(r.frame), colored.colors, markers, ro), feature_legend()));
   const VertexMask* valid = nullptr;
   raw_evaluation(r, o, &valid);
+  double scale = 0.0;
+  const std::vector<Rgb8> evaluation_colors = color_map(r.evaluation_percent, *valid, &scale);
   write_png(base + "evaluation.png",
-            render_views(mesh, {views(r.frame)[0], views(r.frame)[1]}, color_map(r.evaluation_percent, *valid), {}, ro));
+            with_color_bar(render_views(mesh, {views(r.frame)[0], views(r.frame)[1]}, evaluation_colors, {}, ro),
+                           -scale, scale, diverging_bar,
+                           "evaluation after eq. 10 (negative blue, positive red), clipped at the 95th percentile "
+                           "of |value|", "%", {{"not evaluated", kNotEvaluated}}));
 
   const nlohmann::json cp = control_points_json(r);
   write_file_atomically(base + "control_points.json", [&](std::ostream& os) { os << cp.dump(2) << "\n"; });

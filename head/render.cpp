@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -115,6 +116,90 @@ cv::Mat render_views(const TriangleMesh& mesh, const std::vector<Eigen::Matrix3f
   cv::Mat out;
   cv::hconcat(tiles, out);
   return out;
+}
+
+namespace {
+
+constexpr int kLegendFont = cv::FONT_HERSHEY_SIMPLEX;
+constexpr double kLegendScale = 0.5;
+constexpr int kSwatch = 16, kPad = 8, kRow = 26;
+
+int legend_text_width(const std::string& s) {
+  int baseline = 0;
+  return cv::getTextSize(s, kLegendFont, kLegendScale, 1, &baseline).width;
+}
+
+cv::Scalar bgr(Rgb8 c) { return cv::Scalar(c.b, c.g, c.r); }
+
+// Lays the swatches out in rows across `width` from (x0, y0); draws them on `strip` when given. Returns the height
+// used (0 for no entries).
+int swatch_rows(cv::Mat* strip, const std::vector<LegendEntry>& entries, int width, int x0, int y0) {
+  int x = x0, y = y0;
+  for (const LegendEntry& e : entries) {
+    const int w = kSwatch + 6 + legend_text_width(e.name) + 2 * kPad;
+    if (x > x0 && x + w > width) x = x0, y += kRow;
+    if (strip) {
+      cv::rectangle(*strip, cv::Rect(x, y + 4, kSwatch, kSwatch), bgr(e.color), cv::FILLED);
+      cv::rectangle(*strip, cv::Rect(x, y + 4, kSwatch, kSwatch), cv::Scalar(0, 0, 0), 1);
+      cv::putText(*strip, e.name, cv::Point(x + kSwatch + 6, y + 17), kLegendFont, kLegendScale, cv::Scalar(0, 0, 0),
+                  1, cv::LINE_AA);
+    }
+    x += w;
+  }
+  return entries.empty() ? 0 : y - y0 + kRow;
+}
+
+cv::Mat stacked(const cv::Mat& image, const cv::Mat& strip) {
+  cv::Mat out;
+  cv::vconcat(image, strip, out);
+  return out;
+}
+
+std::string tick_label(double v, const std::string& unit) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.3g", v);
+  return std::string(buffer) + (unit.empty() ? "" : " " + unit);
+}
+
+}  // namespace
+
+cv::Mat with_swatch_legend(const cv::Mat& image, const std::vector<LegendEntry>& entries) {
+  const int h = swatch_rows(nullptr, entries, image.cols, kPad, kPad) + 2 * kPad;
+  cv::Mat strip(h, image.cols, CV_8UC3, cv::Scalar(255, 255, 255));
+  swatch_rows(&strip, entries, image.cols, kPad, kPad);
+  return stacked(image, strip);
+}
+
+cv::Mat with_color_bar(const cv::Mat& image, double lo, double hi, Rgb8 (*map)(double value, double lo, double hi),
+                       const std::string& caption, const std::string& unit, const std::vector<LegendEntry>& extra) {
+  if (!(hi > lo)) hi = lo + 1.0;  // a constant field: any bar shows its one colour at lo
+  const int W = image.cols;
+  // caption row, bar, tick labels, then the extra swatches
+  const int bar_x0 = kPad + legend_text_width(tick_label(lo, unit)) / 2;
+  const int bar_x1 = W - kPad - legend_text_width(tick_label(hi, unit)) / 2;
+  if (bar_x1 - bar_x0 < 40)
+    throw Error("legend: an image of " + std::to_string(W) + " px is too narrow for a colour bar");
+  const int caption_y = kPad + 14, bar_y = caption_y + 10, bar_h = 16, ticks_y = bar_y + bar_h + 20;
+  const int extra_y = ticks_y + 6;
+  const int h = extra_y + swatch_rows(nullptr, extra, W, kPad, extra_y) + kPad;
+  cv::Mat strip(h, W, CV_8UC3, cv::Scalar(255, 255, 255));
+  cv::putText(strip, caption, cv::Point(kPad, caption_y), kLegendFont, kLegendScale, cv::Scalar(0, 0, 0), 1,
+              cv::LINE_AA);
+  for (int x = bar_x0; x <= bar_x1; ++x) {
+    const double v = lo + (hi - lo) * double(x - bar_x0) / double(bar_x1 - bar_x0);
+    cv::line(strip, {x, bar_y}, {x, bar_y + bar_h - 1}, bgr(map(v, lo, hi)), 1);
+  }
+  // The frame one pixel outside the bar, so its end columns show the map's extremes.
+  cv::rectangle(strip, cv::Rect(bar_x0 - 1, bar_y - 1, bar_x1 - bar_x0 + 3, bar_h + 2), cv::Scalar(0, 0, 0), 1);
+  for (const double v : {lo, 0.5 * (lo + hi), hi}) {
+    const int x = bar_x0 + int(std::lround((v - lo) / (hi - lo) * (bar_x1 - bar_x0)));
+    cv::line(strip, {x, bar_y + bar_h}, {x, bar_y + bar_h + 4}, cv::Scalar(0, 0, 0), 1);
+    const std::string label = tick_label(v, unit);
+    cv::putText(strip, label, cv::Point(x - legend_text_width(label) / 2, ticks_y), kLegendFont, kLegendScale,
+                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  }
+  swatch_rows(&strip, extra, W, kPad, extra_y);
+  return stacked(image, strip);
 }
 
 void write_png(const std::string& path, const cv::Mat& image) {

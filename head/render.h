@@ -38,6 +38,20 @@ cv::Mat render_views(const TriangleMesh& mesh, const std::vector<Eigen::Matrix3f
                      const std::vector<Rgb8>& colors, const std::vector<RenderMarker>& markers,
                      const RenderOptions& options = {});
 
+// Legends under a rendered image (BGR), returned as a new, taller image of the same width on white:
+// - swatches: a filled square and a name per entry, in rows wrapped to the width (class colours);
+// - a colour bar: `map` sampled from `lo` to `hi` left to right, ticks labelled at lo, the middle and hi with
+//   `unit`, the caption above it, and optional swatches after it for colours outside the bar (e.g. "not evaluated").
+// Text is OpenCV's Hershey font; every entry fits the width or wraps, so nothing is cut off.
+struct LegendEntry {
+  std::string name;
+  Rgb8 color;
+};
+cv::Mat with_swatch_legend(const cv::Mat& image, const std::vector<LegendEntry>& entries);
+cv::Mat with_color_bar(const cv::Mat& image, double lo, double hi, Rgb8 (*map)(double value, double lo, double hi),
+                       const std::string& caption, const std::string& unit,
+                       const std::vector<LegendEntry>& extra = {});
+
 // Writes a BGR image as PNG through a temporary file (core/atomic_file.h); hf::Error naming the file on failure.
 void write_png(const std::string& path, const cv::Mat& image);
 

@@ -77,6 +77,29 @@ Trajectory parse_tum_trajectory(const std::string& text, const std::string& file
   return out;
 }
 
+SE3 parse_tum_pose(const std::string& text, const std::string& what) {
+  const std::string expected = what + ": expected 7 numbers 'tx ty tz qx qy qz qw'";
+  if (text.size() > kMaxLineBytes) throw Error(expected + ", got " + std::to_string(text.size()) + " bytes");
+  const std::vector<std::string_view> words = split_words(text);
+  if (words.size() != 7)
+    throw Error(expected + ", got " + (words.size() > 7 ? std::string("more") : std::to_string(words.size())));
+  double v[7];
+  for (int n = 0; n < 7; ++n) {
+    const std::string token(words[size_t(n)]);
+    char* stop = nullptr;
+    v[n] = std::strtod(token.c_str(), &stop);
+    if (stop == token.c_str() || *stop != '\0' || !std::isfinite(v[n]))
+      throw Error(expected + ", got " + quote_for_message(token));
+    if (n < 3 && !(std::fabs(v[n]) <= kMaxCoordinateM))
+      throw Error(what + ": expected coordinates within 1e6 m, got " + quote_for_message(token));
+  }
+  Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
+  const double largest = q.coeffs().cwiseAbs().maxCoeff();  // scaled first, as in parse_tum_trajectory
+  if (!(largest * (q.coeffs() / largest).norm() >= 1e-6)) throw Error(what + ": expected a non-zero quaternion");
+  q.coeffs() /= largest;
+  return SE3(q, Eigen::Vector3d(v[0], v[1], v[2]));
+}
+
 Trajectory read_tum_trajectory(const std::string& path) {
   return parse_tum_trajectory(read_regular_file(path, "trajectory file"), path);
 }

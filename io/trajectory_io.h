@@ -31,6 +31,12 @@ inline constexpr size_t kMaxTrajectoryPoses = 2'000'000;
 Trajectory read_tum_trajectory(const std::string& path);
 Trajectory parse_tum_trajectory(const std::string& text, const std::string& name_for_errors);
 
+// One pose typed by a person, "tx ty tz qx qy qz qw" (T_world_camera, TUM's order without the stamp; e.g.
+// `view --camera-pose`): the same checks as a trajectory line (finite numbers, coordinates within kMaxCoordinateM,
+// a non-zero quaternion, normalised). Throws hf::Error "WHAT: expected 7 numbers 'tx ty tz qx qy qz qw', got ..."
+// naming the offending token; `what` says where the text came from.
+SE3 parse_tum_pose(const std::string& text, const std::string& what);
+
 // Writes atomically with full double precision; `header` lines are written as '# ' comments.
 void write_tum_trajectory(const std::string& path, const Trajectory& trajectory, const std::string& header = "");
 std::string format_tum_trajectory(const Trajectory& trajectory, const std::string& header = "");

@@ -40,6 +40,58 @@ cv::Mat legend(int width) {
   return bgr;
 }
 
+// buildings.png's colours and its legend. One legend whether or not footprints were compared (red and blue then do
+// not occur): a tiled merge without the footprints writes the single run's file byte for byte.
+const Rgb8 kBuilding{255, 255, 255}, kNothing{0, 0, 0}, kFalsePositive{230, 40, 40}, kMissed{40, 90, 230};
+struct Swatch {
+  const char* name;
+  Rgb8 colour;
+};
+const Swatch kMaskLegend[] = {{"building", kBuilding},
+                              {"no building", kNothing},
+                              {"building outside the footprints (FP)", kFalsePositive},
+                              {"footprint missed (FN)", kMissed}};
+
+int text_width(const char* s) {
+  int baseline = 0;
+  return cv::getTextSize(s, cv::FONT_HERSHEY_SIMPLEX, 0.4, 1, &baseline).width;
+}
+
+// The swatches' strip: a square and the name of each, left to right on white; its width (legend_width) decides the
+// PNG's least width, so no name is cut off.
+template <size_t N>
+int legend_width(const Swatch (&entries)[N]) {
+  int w = 4;
+  for (const Swatch& e : entries) w += 20 + text_width(e.name) + 14;
+  return w;
+}
+
+template <size_t N>
+cv::Mat swatch_strip(int width, const Swatch (&entries)[N]) {
+  cv::Mat bgr(kLegendRows, width, CV_8UC3, cv::Scalar(255, 255, 255));
+  int x0 = 4;
+  for (const Swatch& e : entries) {
+    cv::rectangle(bgr, cv::Rect(x0, 4, 16, 16), cv::Scalar(e.colour.b, e.colour.g, e.colour.r), cv::FILLED);
+    cv::rectangle(bgr, cv::Rect(x0, 4, 16, 16), cv::Scalar(0, 0, 0), 1);
+    cv::putText(bgr, e.name, cv::Point(x0 + 20, 17), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1,
+                cv::LINE_AA);
+    x0 += 20 + text_width(e.name) + 14;
+  }
+  return bgr;
+}
+
+int mask_legend_width() { return legend_width(kMaskLegend); }
+
+void append_rows(PngStream& png, std::vector<Rgb8>& line, const cv::Mat& strip) {
+  for (int y = 0; y < strip.rows; ++y) {
+    for (int x = 0; x < strip.cols; ++x) {
+      const cv::Vec3b p = strip.at<cv::Vec3b>(y, x);
+      line[size_t(x)] = {p[2], p[1], p[0]};
+    }
+    png.row(line.data());
+  }
+}
+
 }  // namespace
 
 ClassPngWriter::ClassPngWriter(const std::string& path, int width, int height)
@@ -54,14 +106,7 @@ void ClassPngWriter::rows(const Image<std::uint8_t>& band) {
 }
 
 void ClassPngWriter::close() {
-  const cv::Mat strip = legend(static_cast<int>(line_.size()));
-  for (int y = 0; y < strip.rows; ++y) {
-    for (int x = 0; x < strip.cols; ++x) {
-      const cv::Vec3b p = strip.at<cv::Vec3b>(y, x);
-      line_[x] = {p[2], p[1], p[0]};
-    }
-    png_.row(line_.data());
-  }
+  append_rows(png_, line_, legend(static_cast<int>(line_.size())));
   png_.close();
 }
 
@@ -155,21 +200,28 @@ void ClassGeoTiffWriter::close() {
 }
 
 MaskPngWriter::MaskPngWriter(const std::string& path, int width, int height)
-    : png_(path, width, height), line_(static_cast<size_t>(width)) {}
+    : png_(path, std::max(width, mask_legend_width()), height + kLegendRows),
+      line_(static_cast<size_t>(std::max(width, mask_legend_width())), Rgb8{255, 255, 255}) {}
 
 void MaskPngWriter::rows(const Mask& band, const Mask* truth) {
   for (int y = 0; y < band.height(); ++y) {
     for (int x = 0; x < band.width(); ++x) {
       const bool m = band(x, y) != 0;
       if (!truth) {
-        line_[x] = m ? Rgb8{255, 255, 255} : Rgb8{0, 0, 0};
+        line_[x] = m ? kBuilding : kNothing;
         continue;
       }
       const bool t = (*truth)(x, y) != 0;
-      line_[x] = m && t ? Rgb8{255, 255, 255} : m ? Rgb8{230, 40, 40} : t ? Rgb8{40, 90, 230} : Rgb8{0, 0, 0};
+      line_[x] = m && t ? kBuilding : m ? kFalsePositive : t ? kMissed : kNothing;
     }
     png_.row(line_.data());
   }
+}
+
+void MaskPngWriter::close() {
+  const int width = static_cast<int>(line_.size());
+  append_rows(png_, line_, swatch_strip(width, kMaskLegend));
+  png_.close();
 }
 
 void write_class_png(const std::string& path, const Image<std::uint8_t>& classes) {

@@ -23,7 +23,8 @@ void check_epsg(int epsg, const std::string& what);
 // Single-band Byte GeoTIFF of the class codes (0 none .. 4 city) with a colour table; epsg 0 leaves the CRS unset,
 // an unknown code is an hf::Error (check_epsg).
 void write_class_geotiff(const std::string& path, const Image<std::uint8_t>& classes, const Grid& grid, int epsg);
-// White on black; with `truth`, cells are coloured TP white, FP red, FN blue.
+// White on black; with `truth`, cells are coloured TP white, FP red, FN blue. A legend strip below names the colours
+// (the image widened to fit it where the mask is narrower).
 void write_mask_png(const std::string& path, const Mask& mask, const Mask* truth = nullptr);
 
 // The same three files written band by band, top to bottom (the tiled merge, lidar/tiling.h, never holds the
@@ -63,7 +64,7 @@ class MaskPngWriter {
  public:
   MaskPngWriter(const std::string& path, int width, int height);
   void rows(const Mask& band, const Mask* truth = nullptr);
-  void close() { png_.close(); }
+  void close();  // appends the legend
 
  private:
   PngStream png_;

@@ -1,89 +1,107 @@
 #include "lidar/png_stream.h"
 
+#include <png.h>
+
+#include <cerrno>
+#include <csetjmp>
+#include <cstdio>
 #include <cstring>
 
 #include "core/error.h"
 
 namespace hf::lidar {
+
 namespace {
-constexpr size_t kIdatBytes = 64 * 1024;
+constexpr size_t kIdatBytes = 64 * 1024;  // libpng writes one IDAT chunk per full compression buffer
+constexpr size_t kErrorBytes = 200;
 }  // namespace
 
-static_assert(sizeof(Rgb8) == 3, "rows are copied as packed RGB");
+static_assert(sizeof(Rgb8) == 3, "rows are handed to libpng as packed RGB");
 
-PngStream::PngStream(const std::string& path, int width, int height) : path_(path), width_(width), height_(height) {
+struct PngStream::Libpng {
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+  std::FILE* file = nullptr;
+  char error[kErrorBytes] = "";  // libpng's message of the failure that jumped back
+
+  ~Libpng() {
+    if (png) png_destroy_write_struct(&png, info ? &info : nullptr);
+    if (file) std::fclose(file);
+  }
+};
+
+namespace {
+
+// libpng reports an error by calling this, which must not return: keep the message and jump back to the
+// setjmp of the call in progress (guarded below).
+[[noreturn]] void on_error(png_structp png, png_const_charp message) {
+  auto* error = static_cast<char*>(png_get_error_ptr(png));
+  std::snprintf(error, kErrorBytes, "%s", message ? message : "unknown libpng error");
+  png_longjmp(png, 1);
+}
+
+void on_warning(png_structp, png_const_charp) {}  // the writes here raise none worth a line on stderr
+
+// Runs `step` (libpng calls only) under libpng's setjmp protocol: false when libpng failed inside it. The frames a
+// longjmp crosses (this one and step's) hold nothing with a destructor.
+template <class Step>
+bool guarded(png_structp png, const Step& step) {
+  if (setjmp(png_jmpbuf(png))) return false;
+  step();
+  return true;
+}
+
+}  // namespace
+
+PngStream::PngStream(const std::string& path, int width, int height)
+    : path_(path), width_(width), height_(height), png_(std::make_unique<Libpng>()) {
   if (width <= 0 || height <= 0) throw Error(path + ": cannot write an empty PNG");
-  out_.open(path, std::ios::binary | std::ios::trunc);
-  if (!out_) throw Error(path + ": cannot open for writing");
-  static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  out_.write(reinterpret_cast<const char*>(signature), 8);
-  // 8 bits, RGB, deflate, adaptive filtering (every row uses filter 0), no interlace.
-  unsigned char ihdr[13] = {0, 0, 0, 0, 0, 0, 0, 0, 8, 2, 0, 0, 0};
-  for (int i = 0; i < 4; ++i)
-    ihdr[i] = static_cast<unsigned char>(std::uint32_t(width) >> (24 - 8 * i)), ihdr[4 + i] = static_cast<unsigned char>(std::uint32_t(height) >> (24 - 8 * i));
-  chunk("IHDR", ihdr, sizeof ihdr);
-  if (deflateInit(&z_, 6) != Z_OK) throw Error(path + ": zlib cannot start");
-  z_open_ = true;
-  line_.resize(1 + size_t(width) * 3);
+  Libpng& p = *png_;
+  p.png = png_create_write_struct(PNG_LIBPNG_VER_STRING, p.error, on_error, on_warning);
+  if (p.png) p.info = png_create_info_struct(p.png);
+  if (!p.png || !p.info) throw Error(path + ": libpng cannot start (out of memory)");
+  p.file = std::fopen(path.c_str(), "wb");
+  if (!p.file) throw Error(path + ": cannot open for writing (" + std::strerror(errno) + ")");
+  const bool ok = guarded(p.png, [&] {
+    png_init_io(p.png, p.file);
+    // Rasters wider or taller than libpng's default 10^6 limit are valid PNGs (up to 2^31 - 1): a country at 0.5 m.
+    png_set_user_limits(p.png, 0x7fffffff, 0x7fffffff);
+    png_set_IHDR(p.png, p.info, png_uint_32(width), png_uint_32(height), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    // Filter None and level 6: what the hand-written writer did; class rasters are runs of a few colours, which
+    // deflate finds without a filter, and adaptive filtering would cost a pass per row over 5 filters.
+    png_set_filter(p.png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
+    png_set_compression_level(p.png, 6);
+    png_set_compression_buffer_size(p.png, kIdatBytes);
+    png_write_info(p.png, p.info);
+  });
+  if (!ok) throw Error(path + ": libpng: " + p.error);
 }
 
-PngStream::~PngStream() {
-  if (z_open_) deflateEnd(&z_);
-}
-
-void PngStream::chunk(const char type[4], const unsigned char* data, size_t size) {
-  unsigned char head[8], tail[4];
-  const auto be32 = [](unsigned char* at, std::uint32_t x) {
-    for (int i = 0; i < 4; ++i) at[i] = static_cast<unsigned char>(x >> (24 - 8 * i));
-  };
-  be32(head, std::uint32_t(size));
-  std::memcpy(head + 4, type, 4);
-  std::uint32_t crc = static_cast<std::uint32_t>(crc32(0, head + 4, 4));
-  if (size) crc = static_cast<std::uint32_t>(crc32(crc, data, static_cast<uInt>(size)));
-  be32(tail, crc);
-  out_.write(reinterpret_cast<const char*>(head), 8);
-  if (size) out_.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
-  out_.write(reinterpret_cast<const char*>(tail), 4);
-  if (!out_) throw Error(path_ + ": write failed (disk full?)");
-}
-
-// Deflates `data` and emits every full 64 KiB of compressed bytes as one IDAT chunk.
-void PngStream::deflate_into_chunks(const unsigned char* data, size_t size, int flush) {
-  z_.next_in = const_cast<Bytef*>(data);
-  z_.avail_in = static_cast<uInt>(size);
-  unsigned char buffer[16384];
-  int rc = Z_OK;
-  do {
-    z_.next_out = buffer;
-    z_.avail_out = sizeof buffer;
-    rc = deflate(&z_, flush);
-    if (rc == Z_STREAM_ERROR) throw Error(path_ + ": zlib failed");
-    idat_.insert(idat_.end(), buffer, buffer + (sizeof buffer - z_.avail_out));
-    while (idat_.size() >= kIdatBytes) {
-      chunk("IDAT", idat_.data(), kIdatBytes);
-      idat_.erase(idat_.begin(), idat_.begin() + kIdatBytes);
-    }
-  } while (z_.avail_out == 0 || (flush == Z_FINISH && rc != Z_STREAM_END));
-}
+PngStream::~PngStream() = default;
 
 void PngStream::row(const Rgb8* pixels) {
   if (rows_ >= height_) throw Error(path_ + ": more than " + std::to_string(height_) + " rows");
-  line_[0] = 0;  // filter type None
-  std::memcpy(line_.data() + 1, pixels, size_t(width_) * 3);
-  deflate_into_chunks(line_.data(), line_.size(), Z_NO_FLUSH);
+  png_structp png = png_->png;
+  // png_write_row takes a non-const row pointer but only reads it (no transformations are set).
+  const auto bytes = reinterpret_cast<png_bytep>(const_cast<Rgb8*>(pixels));
+  if (!guarded(png, [&] { png_write_row(png, bytes); }))
+    throw Error(path_ + ": write failed (" + png_->error + "; disk full?)");
   ++rows_;
 }
 
 void PngStream::close() {
   if (rows_ != height_) throw Error(path_ + ": " + std::to_string(rows_) + " of " + std::to_string(height_) + " rows written");
-  deflate_into_chunks(nullptr, 0, Z_FINISH);
-  if (!idat_.empty()) chunk("IDAT", idat_.data(), idat_.size());
-  idat_.clear();
-  chunk("IEND", nullptr, 0);
-  deflateEnd(&z_);
-  z_open_ = false;
-  out_.close();
-  if (!out_) throw Error(path_ + ": write failed (disk full?)");
+  Libpng& p = *png_;
+  if (!guarded(p.png, [&] { png_write_end(p.png, p.info); }))
+    throw Error(path_ + ": write failed (" + p.error + "; disk full?)");
+  std::FILE* file = p.file;
+  p.file = nullptr;
+  if (std::fflush(file) != 0 || std::ferror(file) != 0) {
+    std::fclose(file);
+    throw Error(path_ + ": write failed (disk full?)");
+  }
+  if (std::fclose(file) != 0) throw Error(path_ + ": write failed (disk full?)");
 }
 
 }  // namespace hf::lidar

@@ -1,16 +1,13 @@
-// An RGB8 PNG written row by row (the tiled merge writes rasters larger than memory): IHDR, the rows deflated as
-// they come (filter 0, zlib level 6) into IDAT chunks of exactly 64 KiB (the last shorter), IEND. The bytes depend
-// only on the rows, not on how the caller groups them, so a single run and a merge write the same file.
-// Failures (cannot open, disk full, too many or too few rows at close) throw hf::Error naming the file; the
-// caller owns atomicity (write_path_atomically).
+// An RGB8 PNG written row by row (the tiled merge writes rasters larger than memory), through libpng's row writer
+// (png_write_row): IHDR, the rows deflated as they come (filter None, zlib level 6) into IDAT chunks of libpng's
+// 64 KiB compression buffer (the last shorter), IEND. The bytes depend only on the rows, not on how the caller
+// groups them, so a single run and a merge write the same file.
+// Failures (cannot open, disk full, a libpng error, too many or too few rows at close) throw hf::Error naming the
+// file; the caller owns atomicity (write_path_atomically). Not thread-safe; one writer per file.
 #pragma once
 
-#include <cstdint>
-#include <fstream>
+#include <memory>
 #include <string>
-#include <vector>
-
-#include <zlib.h>
 
 #include "core/image.h"
 
@@ -27,15 +24,10 @@ class PngStream {
   void close();                  // after exactly `height` rows
 
  private:
-  void deflate_into_chunks(const unsigned char* data, size_t size, int flush);
-  void chunk(const char type[4], const unsigned char* data, size_t size);
-
+  struct Libpng;  // libpng's write state and the file (png_stream.cpp); keeps png.h out of this header
   std::string path_;
   int width_ = 0, height_ = 0, rows_ = 0;
-  std::ofstream out_;
-  z_stream z_{};
-  bool z_open_ = false;
-  std::vector<unsigned char> line_, idat_;
+  std::unique_ptr<Libpng> png_;
 };
 
 }  // namespace hf::lidar

@@ -854,7 +854,8 @@ TriangleMesh Pipeline::extract_mesh() const {
 ColorImage Pipeline::render(const SE3& T_world_camera) const {
   fusion::RaycastOptions options = config_.raycast;
   options.shade = true;
-  return fusion::raycast(grid_, camera_, T_world_camera, options).shaded;
+  options.color = true;  // the tracking raycast's options leave it off
+  return fusion::colored_shading(fusion::raycast(grid_, camera_, T_world_camera, options));
 }
 
 std::map<std::string, std::string> Pipeline::stage_devices() const {

@@ -219,7 +219,8 @@ class Pipeline {
 
   // The whole map (resident and streamed-out blocks) as a welded, coloured mesh.
   TriangleMesh extract_mesh() const;
-  // A shaded raycast of the model from `T_world_camera` with the pipeline's camera, for people.
+  // A shaded raycast of the model from `T_world_camera` with the pipeline's camera, for people: the head-light
+  // shading modulated by the fused colour (fusion::colored_shading; grey where no colour was fused).
   ColorImage render(const SE3& T_world_camera) const;
   // Where each stage runs (report.json "devices"): preprocess, registration, integrate, raycast -> "cpu" or the
   // OpenCL device's "platform / device". backend = "opencl" integrates and casts the tracking raycast on the device

@@ -140,10 +140,10 @@ nlohmann::json summary_to_json(const RunSummary& summary, const SequenceRun& run
                                const FrameSource& source);
 
 // Writes into `dir` (created if needed), each file atomically: trajectory.txt, mesh.ply (binary, coloured),
-// report.json, report.md, render.png (shaded model from the last good pose) and trajectory.png (with ground
-// truth). report.json's "outputs" lists the file names of this set; a file of ours (run_output_names()) that this
-// run does not write, left by an earlier run into the same folder, is removed. Returns the paths written, in
-// that order.
+// report.json, report.md, render.png (the model from the last good pose, shaded in its fused colours) and
+// trajectory.png (with ground truth). report.json's "outputs" lists the file names of this set; a file of ours
+// (run_output_names()) that this run does not write, left by an earlier run into the same folder, is removed.
+// Returns the paths written, in that order.
 // Every file name write_run_outputs may write into its folder (map.hfmap, cloud.ply and cloud.pcd with
 // RunOutputOptions naming them there).
 const std::vector<std::string>& run_output_names();

@@ -1,5 +1,7 @@
 #include "viewer/mesh_renderer.h"
 
+#include <algorithm>
+
 #include <glm/glm.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
@@ -62,7 +64,9 @@ void main() {
   float c = max(dot(normalize(n_camera), to_camera), 0.0);
   float c16 = pow(c, 16.0);
   float i = min(0.2 + 0.7 * c + 0.1 * c16, 1.0);
-  frag = vec4(use_colors != 0 ? v_color * i : vec3(i), 1.0);
+  // A black vertex colour is no fused colour (fusion::colored_shading's rule): grey shading there.
+  bool coloured = use_colors != 0 && max(v_color.r, max(v_color.g, v_color.b)) > 0.0;
+  frag = vec4(coloured ? v_color * i : vec3(i), 1.0);
 }
 )";
 
@@ -212,6 +216,11 @@ void MeshRenderer::set_mesh(const TriangleMesh& mesh) {
   }
   glBindVertexArray(0);
   triangles_ = int(idx.size() / 3);
+  mesh_lo_ = Eigen::Vector3f::Zero(), mesh_hi_ = Eigen::Vector3f::Zero();
+  if (!mesh.vertices.empty()) {
+    mesh_lo_ = mesh_hi_ = mesh.vertices[0];
+    for (const auto& p : mesh.vertices) mesh_lo_ = mesh_lo_.cwiseMin(p), mesh_hi_ = mesh_hi_.cwiseMax(p);
+  }
 }
 
 void MeshRenderer::set_backdrop(const ColorImage& image, const DepthImage& depth_m) {
@@ -229,7 +238,16 @@ void MeshRenderer::set_backdrop(const ColorImage& image, const DepthImage& depth
 
 void MeshRenderer::draw(const PinholeCamera& camera, const SE3& T_world_camera, const std::vector<Polyline>& lines,
                         bool use_colors) {
-  const double near_m = 0.05, far_m = 50.0;
+  // The far plane reaches past the mesh's farthest bounding-box corner (at least 50 m), so a large mesh framed
+  // whole (view_files.h frame_mesh) is not cut off; near stays 0.05 m for close-ups.
+  const double near_m = 0.05;
+  double far_m = 50.0;
+  if (triangles_ > 0)
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3d corner((k & 1) ? mesh_hi_.x() : mesh_lo_.x(), (k & 2) ? mesh_hi_.y() : mesh_lo_.y(),
+                                   (k & 4) ? mesh_hi_.z() : mesh_lo_.z());
+      far_m = std::max(far_m, 1.05 * (T_world_camera.inverse() * corner).z());
+    }
   const glm::mat4 clip = pinhole_clip(camera, near_m, far_m);
   const glm::mat4 T_camera_world = to_glm(T_world_camera.inverse().matrixf());
   glEnable(GL_DEPTH_TEST);

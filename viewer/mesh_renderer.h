@@ -5,7 +5,8 @@
 // lands on pixel (fx X/Z + cx, fy Y/Z + cy) of p_camera = T_world_camera^-1 p, exactly as the CPU raycast
 // (fusion/raycast.h) sees it. Surfaces are shaded with the same head-light formula as the raycast's `shaded`
 // image (hf_headlight_shade, fusion/kernels/raycast_kernels.h: 0.2 + 0.7 c + 0.1 c^16, c = n . v clamped at 0),
-// grey, or modulated by vertex colour with `use_colors`; so a GL render of a TSDF's mesh and the CPU raycast of the
+// grey, or modulated by vertex colour with `use_colors` (a black vertex keeps the grey: fusion::colored_shading's
+// rule for "no colour fused"); so a GL render of a TSDF's mesh and the CPU raycast of the
 // same TSDF from the same pose differ only by where marching cubes and the ray's refined crossing put the surface.
 // Background black (as the raycast's no-hit pixels). Lines: world-space polylines in one colour each.
 // Requires a current GlContext on the calling thread; throws hf::Error naming the GL failure.
@@ -61,6 +62,7 @@ class MeshRenderer {
   struct Gl;
   std::unique_ptr<Gl> gl_;
   int triangles_ = 0;
+  Eigen::Vector3f mesh_lo_ = Eigen::Vector3f::Zero(), mesh_hi_ = Eigen::Vector3f::Zero();  // its bounding box
   bool backdrop_ = false;
 };
 

@@ -27,7 +27,7 @@ namespace run_viewer_detail {
 struct ModelView {
   PinholeCamera camera;
   SE3 T_world_view;
-  ColorImage shaded;
+  ColorImage shaded;  // fusion::colored_shading
   DepthImage depth;
 };
 
@@ -69,7 +69,7 @@ ColorImage depth_as_grey(const DepthImage& d) {
 
 ModelView render_model(const fusion::VoxelBlockGrid& map, const PinholeCamera& camera, const SE3& T_world_view) {
   fusion::RaycastResult r = fusion::raycast(map, camera, T_world_view, model_view_options());
-  return {camera, T_world_view, std::move(r.shaded), std::move(r.depth)};
+  return {camera, T_world_view, fusion::colored_shading(r), std::move(r.depth)};
 }
 
 // The window's model view size for a viewport: its aspect, at most kModelViewMaxPx on the longer side.
@@ -88,7 +88,7 @@ fusion::RaycastOptions model_view_options() {
   fusion::RaycastOptions o;
   o.max_depth_m = 20.0;
   o.refine_tol_vox = 0.05;
-  o.color = false;
+  o.color = true;  // shaded in the fused colours (fusion::colored_shading), as render.png
   o.shade = true;
   return o;
 }
@@ -201,7 +201,7 @@ void RunViewer::Impl::render_headless(MeshRenderer& renderer) {
       lock.unlock();
       renderer.set_backdrop({}, {});
       renderer.set_mesh(mesh);
-      write_color_png(options.screenshot, renderer.render(camera, at));
+      write_color_png(options.screenshot, renderer.render(camera, at, {}, true));
     }
     return;
   }

@@ -3,9 +3,9 @@
 //
 // The tracking thread calls observe() after each frame and hold() before the next. observe() copies what the view
 // needs into a snapshot under a mutex (the input colour and depth, the pose and state, the status line), and,
-// between frames while the map is not being modified, renders the model: a shaded raycast of the TSDF
-// (fusion/raycast.h, model_view_options()) from the free camera's pose, what the window asked for last, at most
-// kModelViewMaxPx on its longer side, at most kModelViewHz times a second and only after a pause of 1 /
+// between frames while the map is not being modified, renders the model: a raycast of the TSDF shaded in its fused
+// colours (fusion/raycast.h, model_view_options()) from the free camera's pose, what the window asked for last, at
+// most kModelViewMaxPx on its longer side, at most kModelViewHz times a second and only after a pause of 1 /
 // kModelViewShare times the last one's cost, so the raycasts take at most that share of the tracking thread's time
 // (what one costs: bench/results/viewer.md). The window thread redraws at its own rate (about 30 Hz) from
 // the latest snapshot: on the left the model raycast, the trajectory (green, lost frames marked red) and the
@@ -70,9 +70,9 @@ inline constexpr double kModelViewHz = 15.0;
 inline constexpr double kModelViewShare = 0.2;
 inline constexpr int kModelViewMaxPx = 640;
 
-// The raycast the model view uses: the defaults of fusion::RaycastOptions but shading only (no colour), rays out to
-// 20 m (the free camera stands back from the scene) and the crossing refined to 0.05 voxel (the pipeline's tracking
-// raycast's tolerance: far below a pixel at any distance shown).
+// The raycast the model view uses: the defaults of fusion::RaycastOptions (shading and colour, shown as
+// fusion::colored_shading), rays out to 20 m (the free camera stands back from the scene) and the crossing refined
+// to 0.05 voxel (the pipeline's tracking raycast's tolerance: far below a pixel at any distance shown).
 fusion::RaycastOptions model_view_options();
 
 // A screenshot path for frame `index`: "shots/v.png" -> "shots/v_000120.png".

@@ -33,6 +33,33 @@ cv::Size text_size(const std::string& s, double scale, int thickness = 1) {
   return cv::getTextSize(s, kFont, scale, thickness, &baseline);
 }
 
+// `s` broken at spaces into lines each at most `width` pixels wide at this scale (a single word wider than that
+// is cut character by character), so no footer runs off the canvas however many methods it lists.
+std::vector<std::string> wrap_to_width(const std::string& s, double scale, int width) {
+  std::vector<std::string> lines;
+  std::string line;
+  size_t i = 0;
+  while (i < s.size()) {
+    const size_t space = s.find(' ', i);
+    const std::string word = s.substr(i, space == std::string::npos ? std::string::npos : space + 1 - i);
+    i = space == std::string::npos ? s.size() : space + 1;
+    if (text_size(line + word, scale).width <= width || line.empty()) {
+      line += word;
+    } else {
+      lines.push_back(line);
+      line = word;
+    }
+    while (line.size() > 1 && text_size(line, scale).width > width) {  // one word wider than the canvas
+      size_t n = line.size() - 1;
+      while (n > 1 && text_size(line.substr(0, n), scale).width > width) --n;
+      lines.push_back(line.substr(0, n));
+      line = line.substr(n);
+    }
+  }
+  if (!line.empty()) lines.push_back(line);
+  return lines;
+}
+
 std::string format_g(double v) {
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, "%g", v);
@@ -147,9 +174,27 @@ ColorImage render_speed_plot(const std::vector<SpeedPoint>& points, const SpeedP
   const std::string title = options.title.empty() ? "speed against error" : options.title;
   const int title_h = text_size(title, font * 1.25, 2).height, line_h = text_size("Ag", font).height;
   const int margin_top = int(20 * font / 0.55) + title_h + (options.subtitle.empty() ? 0 : line_h + 12);
-  const int footer_lines = 1 + (not_plotted.empty() ? 0 : 1);
-  const int margin_bottom = int(75 * font / 0.55) + footer_lines * (line_h + 12);
   const int margin_left = int(110 * font / 0.55), margin_right = int(40 * font / 0.55);
+  // The footer, wrapped to the width from the plot's left edge to the canvas's right margin; the plot area gives
+  // up the height its lines take.
+  std::vector<std::string> footer = wrap_to_width(
+      "disc: hashfusion method   square: peer (PCL, Open3D; frame-to-frame)   ringed, dashed: Pareto front "
+      "(lower left is better)",
+      font * 0.9, W - margin_left - margin_right);
+  if (!not_plotted.empty()) {
+    std::string line = "not plotted (failed or lost): ";
+    for (size_t k = 0; k < not_plotted.size(); ++k) line += (k ? ", " : "") + not_plotted[k];
+    for (std::string& l : wrap_to_width(line, font * 0.9, W - margin_left - margin_right)) footer.push_back(l);
+  }
+  // At most a third of the canvas: beyond that the list is cut with a count of what is left out.
+  const int max_footer_lines = std::max(2, (H / 3) / (line_h + 12));
+  if (int(footer.size()) > max_footer_lines) {
+    const size_t cut = footer.size() - size_t(max_footer_lines) + 1;
+    footer.resize(size_t(max_footer_lines) - 1);
+    footer.push_back("... and " + std::to_string(cut) + " more lines of methods not plotted");
+  }
+  const int footer_lines = int(footer.size());
+  const int margin_bottom = int(75 * font / 0.55) + footer_lines * (line_h + 12);
   const cv::Rect area(margin_left, margin_top, W - margin_left - margin_right, H - margin_top - margin_bottom);
   auto to_px = [&](double x, double y) {
     return cv::Point2d(area.x + ax.unit(x) * area.width, area.y + area.height - ay.unit(y) * area.height);
@@ -259,13 +304,9 @@ ColorImage render_speed_plot(const std::vector<SpeedPoint>& points, const SpeedP
       text(img, options.subtitle, {std::max(4, W / 2 - ss.width / 2), y}, font, kBlack);
     }
     int fy = H - int(12 * font / 0.55) - (footer_lines - 1) * (line_h + 12);
-    text(img, "disc: hashfusion method   square: peer (PCL, Open3D; frame-to-frame)   ringed, dashed: Pareto front "
-              "(lower left is better)", {area.x, fy}, font * 0.9, kAxis);
-    if (!not_plotted.empty()) {
-      std::string line = "not plotted (failed or lost): ";
-      for (size_t k = 0; k < not_plotted.size(); ++k) line += (k ? ", " : "") + not_plotted[k];
-      fy += line_h + 12;
+    for (const std::string& line : footer) {
       text(img, line, {area.x, fy}, font * 0.9, kAxis);
+      fy += line_h + 12;
     }
   }
   if (pts.empty()) {

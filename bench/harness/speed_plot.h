@@ -2,7 +2,8 @@
 // better, so the best corner is the lower left), the Pareto front joined by a dashed step line and its points
 // ringed. An axis is logarithmic when its data span more than a factor of 10, else linear. Peers are drawn as
 // squares, hashfusion methods as discs. Methods without a comparable ATE (or with a time or error beyond 1e12, no
-// plottable range) are listed under the plot as "not plotted"; every tick and dash loop is bounded by a count.
+// plottable range) are listed under the plot as "not plotted"; the footer is wrapped to the canvas's width (at
+// most a third of its height, then cut with a count); every tick and dash loop is bounded by a count.
 // Drawn with OpenCV in the style of slam/eval_plot.cpp.
 // Thread-safety: pure functions. Failures: hf::Error (size out of range, a file that cannot be written).
 #pragma once

@@ -181,6 +181,62 @@ groundtruth_link)  # issue 35's leftover: a TUM folder whose groundtruth.txt is 
   rm tum/groundtruth.txt
   timeout 120 "$HF" run --input tum --camera cam.txt --out o > log 2>&1 || fail "no ground truth at all: $(cat log)"
   ;;
+pictures)  # coloured render.png; view frames a bare mesh, --camera-pose; the lidar PNGs decode and carry legends
+  PNG="python3 $SRC/tests/apps/png_pixels.py"
+  timeout 300 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 3 --out a > log 2>&1 ||
+    fail "run: $(tail -3 log)"
+  # render.png in the fused colours: most surface pixels are not grey (the room's walls are coloured)
+  python3 - a/render.png <<PY || fail "render.png is grey"
+import sys; sys.path.insert(0, "$SRC/tests/apps"); import png_pixels
+w, h, rows = png_pixels.read(sys.argv[1])
+surface = [p for row in rows for p in row if max(p) > 0]
+coloured = [p for p in surface if max(p) - min(p) > 24]
+assert len(surface) > w * h // 4, len(surface)
+assert len(coloured) > len(surface) // 2, (len(coloured), len(surface))
+PY
+  # --camera-pose: checked before anything else (no display needed), one line, exit 1
+  for bad in "1 2 3" "0 0 abc 0 0 0 1" "0 0 0 0 0 0 0" "0 0 0 0 0 0 nan"; do
+    env -u DISPLAY timeout 60 "$HF" view a/mesh.ply --camera-pose "$bad" --screenshot x.png > out.txt 2> log
+    rc=$?
+    [ $rc = 1 ] || fail "view --camera-pose '$bad': exit $rc: $(cat log)"
+    [ "$(wc -l < log)" = 1 ] && grep -q "view: --camera-pose: expected" log || fail "'$bad': $(cat log)"
+    [ ! -e x.png ] || fail "a bad pose wrote a screenshot"
+  done
+  if command -v xvfb-run > /dev/null && "$HF" view --help > /dev/null 2>&1; then
+    # a bare mesh: framed whole (surface pixels, none on the border), in its colours
+    timeout 120 xvfb-run -a env HF_VIEWER_NO_EGL=1 "$HF" view a/mesh.ply --camera cam.txt --screenshot bare.png \
+      > log 2>&1 || fail "view mesh.ply: $(cat log)"
+    python3 - bare.png <<PY || fail "the bare mesh is not framed whole or not coloured"
+import sys; sys.path.insert(0, "$SRC/tests/apps"); import png_pixels
+w, h, rows = png_pixels.read(sys.argv[1])
+surface = [(x, y) for y in range(h) for x in range(w) if max(rows[y][x]) > 0]
+border = [(x, y) for x, y in surface if x < 2 or y < 2 or x >= w - 2 or y >= h - 2]
+coloured = [1 for x, y in surface if max(rows[y][x]) - min(rows[y][x]) > 24]
+assert len(surface) > w * h // 20, len(surface)  # not a speck
+assert not border, border[:5]
+assert len(coloured) > len(surface) // 2, (len(coloured), len(surface))
+PY
+    # the first camera's pose (the room's first frame looks at its content from the origin): another picture
+    timeout 120 xvfb-run -a env HF_VIEWER_NO_EGL=1 "$HF" view a/mesh.ply --camera cam.txt \
+      --camera-pose "$(awk '!/^#/ {print $2, $3, $4, $5, $6, $7, $8; exit}' a/trajectory.txt)" \
+      --screenshot posed.png > log 2>&1 || fail "view --camera-pose: $(cat log)"
+    [ -s posed.png ] && ! cmp -s posed.png bare.png || fail "--camera-pose made no difference"
+  else
+    echo "skipped the screenshots: no xvfb-run or no viewer"
+  fi
+  # lidar: classes.png and buildings.png (libpng, lidar/png_stream.h) decode and end with a legend strip
+  timeout 300 "$HF" lidar --input synthetic:1 --out l > log 2>&1 || fail "lidar: $(tail -3 log)"
+  for f in classes buildings; do
+    python3 - l/$f.png <<PY || fail "l/$f.png: no legend or does not decode"
+import sys; sys.path.insert(0, "$SRC/tests/apps"); import png_pixels
+w, h, rows = png_pixels.read(sys.argv[1])
+strip = rows[h - 24:]  # the legend: white with black swatch borders and names
+white = sum(1 for row in strip for p in row if p == (255, 255, 255))
+dark = sum(1 for row in strip for p in row if max(p) < 60)
+assert white > len(strip) * w // 2 and dark > 50, (white, dark)
+PY
+  done
+  ;;
 *)
   fail "unknown case"
   ;;

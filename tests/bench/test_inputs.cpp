@@ -150,6 +150,23 @@ TEST(BenchSpeedPlot, DrawsPointsFrontAndLabels) {
   o.width_px = 100;
   EXPECT_THROW(render_speed_plot(pts, o), Error);
 
+  // The footer fits the canvas (issue 36: it ran off the right edge): with a long "not plotted" list at the
+  // smallest width, the text is wrapped, so the rightmost columns stay white, and the lines still show at the
+  // bottom (dark text pixels in the lowest tenth).
+  for (const int width : {400, 640, 1100}) {
+    SpeedPlotOptions narrow = o;
+    narrow.width_px = width;
+    for (int k = 0; k < 30; ++k) narrow.not_plotted.push_back("method_number_" + std::to_string(k) + " (lost)");
+    const ColorImage f = render_speed_plot(pts, narrow);
+    long right_edge_ink = 0, footer_ink = 0;
+    for (int y = 0; y < f.height(); ++y)
+      for (int x = f.width() - 6; x < f.width(); ++x) right_edge_ink += f(x, y).r < 200 ? 1 : 0;
+    for (int y = f.height() * 9 / 10; y < f.height(); ++y)
+      for (int x = 0; x < f.width(); ++x) footer_ink += f(x, y).r < 200 ? 1 : 0;
+    EXPECT_EQ(right_edge_ink, 0) << "text runs off the right edge at width " << width;
+    EXPECT_GT(footer_ink, 50) << "no footer at width " << width;
+  }
+
   const fs::path file = fs::temp_directory_path() / ("hf_speed_plot_" + std::to_string(::getpid()) + ".png");
   o.width_px = 640;
   write_speed_plot(file.string(), pts, o);

@@ -513,6 +513,60 @@ TEST(Raycast, WithoutColourTheGeometryIsUnchanged) {
   EXPECT_GT(coloured, with.hit_count / 2);  // fill() paints the sphere, so the comparison is not vacuous
 }
 
+// The render for people in the fused colours (colored_shading, what `run` writes as render.png): a sphere fused
+// from one view whose colour image is red on the left half and green on the right comes out red-dominant on the
+// left and green-dominant on the right, each pixel its fused colour times the head-light shade (within the 8-bit
+// rounding of both); the same sphere fused without colour keeps the grey shading pixel for pixel.
+TEST(Raycast, ColoredShadingShowsTheFusedColour) {
+  const Eigen::Vector3d c(0.02, -0.01, 1.0);
+  const SE3 T = datasets::look_at({0.0, 0.0, 0.0}, c);
+  const DepthImage depth = testing::render_sphere_depth(kCamera, T, c, 0.3);
+  ColorImage colour(kCamera.width, kCamera.height);
+  const Rgb8 red{200, 40, 30}, green{30, 180, 50};
+  for (int y = 0; y < kCamera.height; ++y)
+    for (int x = 0; x < kCamera.width; ++x) colour(x, y) = x < kCamera.width / 2 ? red : green;
+  VoxelBlockGrid grid(raycast_params_1cm()), grey_grid(raycast_params_1cm());
+  integrate(grid, depth, colour, kCamera, T);
+  integrate(grey_grid, depth, ColorImage(), kCamera, T);
+  const RaycastResult r = raycast(grid, kCamera, T);
+  const ColorImage shown = colored_shading(r);
+  ASSERT_GT(r.hit_count, 3000);
+  int left = 0, right = 0;
+  for (int y = 0; y < kCamera.height; ++y)
+    for (int x = 0; x < kCamera.width; ++x) {
+      const Rgb8 s = shown(x, y), g = r.shaded(x, y), f = r.color(x, y);
+      if (r.depth(x, y) <= 0.0f) {
+        EXPECT_EQ(s, Rgb8{}) << x << "," << y;
+        continue;
+      }
+      if (f == Rgb8{}) {  // no colour fused at the edge of the observed band: the grey shading
+        EXPECT_EQ(s, g) << x << "," << y;
+        continue;
+      }
+      // colour x shade / 255, rounded once from the 8-bit grey: within one level of the exact product.
+      EXPECT_NEAR(s.r, f.r * g.r / 255.0, 1.0) << x << "," << y;
+      EXPECT_NEAR(s.g, f.g * g.r / 255.0, 1.0) << x << "," << y;
+      // Away from the seam (a voxel's trilinear reach, 3 pixels at 1 m) each side shows its colour.
+      if (std::abs(x - kCamera.width / 2) < 4 || g.r < 100) continue;
+      if (x < kCamera.width / 2) {
+        ++left;
+        EXPECT_GT(s.r, 2 * s.g) << x << "," << y;
+        EXPECT_GT(s.r, 2 * s.b) << x << "," << y;
+      } else {
+        ++right;
+        EXPECT_GT(s.g, 2 * s.r) << x << "," << y;
+        EXPECT_GT(s.g, 2 * s.b) << x << "," << y;
+      }
+    }
+  EXPECT_GT(left, 1000);
+  EXPECT_GT(right, 1000);
+  const RaycastResult grey = raycast(grey_grid, kCamera, T);
+  EXPECT_EQ(colored_shading(grey).pixels(), grey.shaded.pixels());
+  RaycastOptions no_shade;
+  no_shade.shade = false;
+  EXPECT_THROW(colored_shading(raycast(grid, kCamera, T, no_shade)), Error);
+}
+
 // blocks_in_view holds every block a raycast can read: at points on rays through pixels across the image (its
 // border rows and columns included) at depths from min_depth_m to max_depth_m, every existing block holding a voxel
 // of the 4 x 4 x 4 neighbourhood a sample and its normal read is in the set. Seen from inside the room with a

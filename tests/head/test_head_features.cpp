@@ -13,6 +13,7 @@
 #include "head/feature_outputs.h"
 #include "head/feature_spec.h"
 #include "head/head_features.h"
+#include "head/render.h"
 #include "io/ply.h"
 #include "tests/common/analytic_meshes.h"
 
@@ -232,6 +233,36 @@ TEST(FeatureOutputs, DivergingColourMap) {
   EXPECT_EQ(diverging_color(2, 1), (Rgb8{255, 0, 0}));
   EXPECT_EQ(diverging_color(-1, 1), (Rgb8{0, 0, 255}));
   EXPECT_EQ(diverging_color(5, 0), (Rgb8{255, 255, 255}));
+}
+
+// The legends under features.png (swatches) and evaluation.png (a colour bar): appended below the image at its
+// width, every swatch colour present, wrapped so no name runs off the right edge; the bar runs from map(lo) on the
+// left to map(hi) on the right.
+TEST(HeadRender, LegendsShowTheirColoursWithinTheWidth) {
+  const cv::Mat image(60, 300, CV_8UC3, cv::Scalar(255, 255, 255));
+  std::vector<LegendEntry> entries;
+  for (int k = 0; k < 9; ++k)
+    entries.push_back({"entry number " + std::to_string(k), Rgb8{std::uint8_t(20 * k), 90, 200}});
+  const cv::Mat swatches = with_swatch_legend(image, entries);
+  ASSERT_EQ(swatches.cols, 300);
+  ASSERT_GT(swatches.rows, 60 + 3 * 20) << "nine entries in 300 px take several rows";
+  const auto has = [](const cv::Mat& m, int y0, Rgb8 c) {
+    for (int y = y0; y < m.rows; ++y)
+      for (int x = 0; x < m.cols; ++x)
+        if (m.at<cv::Vec3b>(y, x) == cv::Vec3b(c.b, c.g, c.r)) return true;
+    return false;
+  };
+  for (const LegendEntry& e : entries) EXPECT_TRUE(has(swatches, 60, e.color)) << e.name;
+  for (int y = 60; y < swatches.rows; ++y)
+    for (int x = 296; x < 300; ++x) ASSERT_EQ(swatches.at<cv::Vec3b>(y, x), cv::Vec3b(255, 255, 255)) << x << "," << y;
+  const auto map = [](double v, double, double hi) { return diverging_color(v, hi); };
+  const cv::Mat bar = with_color_bar(image, -5.0, 5.0, map, "caption", "%", {{"not evaluated", Rgb8{128, 128, 128}}});
+  ASSERT_EQ(bar.cols, 300);
+  ASSERT_GT(bar.rows, 60);
+  EXPECT_TRUE(has(bar, 60, diverging_color(-5.0, 5.0)));  // full blue
+  EXPECT_TRUE(has(bar, 60, diverging_color(5.0, 5.0)));   // full red
+  EXPECT_TRUE(has(bar, 60, Rgb8{128, 128, 128}));
+  EXPECT_NO_THROW(with_color_bar(image, 0.0, 0.0, map, "a constant field", "%"));
 }
 
 }  // namespace

@@ -142,3 +142,29 @@ TEST(TrajectoryIo, ReadsOnlyRegularFiles) {
     EXPECT_TRUE(contains(error_of([&] { hf::read_tum_trajectory(dir / "zero.txt"); }), "character device"));
   }
 }
+
+// One typed pose ("view --camera-pose"): TUM's order without the stamp, the quaternion normalised; anything else is
+// one message naming the option and the offending token.
+TEST(TrajectoryIo, TypedPoseInTumOrder) {
+  const hf::SE3 T = hf::parse_tum_pose(" 1.5 -2 0.25  0 0 0.70710678118654752 0.70710678118654752 ", "--camera-pose");
+  EXPECT_NEAR((T.translation() - Eigen::Vector3d(1.5, -2, 0.25)).norm(), 0.0, 1e-15);
+  // qz = qw = 1/sqrt(2): 90 degrees about z, so the camera's x axis points along world y.
+  EXPECT_NEAR((T.rotation() * Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitY()).norm(), 0.0, 1e-12);
+  const hf::SE3 scaled = hf::parse_tum_pose("0 0 0 0 0 0 2", "p");  // normalised, as trajectory lines are
+  EXPECT_NEAR((scaled.rotation() - Eigen::Matrix3d::Identity()).norm(), 0.0, 1e-15);
+  const std::pair<std::string, std::string> cases[] = {
+      {"", "expected 7 numbers 'tx ty tz qx qy qz qw', got 0"},
+      {"1 2 3", "got 3"},
+      {"0 0 0 0 0 0 1 5", "got more"},
+      {"0 0 abc 0 0 0 1", "got 'abc'"},
+      {"0 0 0 0 0 0 nan", "got 'nan'"},
+      {"0 0 1e7 0 0 0 1", "expected coordinates within 1e6 m"},
+      {"0 0 0 0 0 0 0", "expected a non-zero quaternion"},
+  };
+  for (const auto& [text, expect] : cases) {
+    const std::string msg = error_of([&] { hf::parse_tum_pose(text, "view: --camera-pose"); });
+    EXPECT_TRUE(contains(msg, "view: --camera-pose: ")) << text << " -> " << msg;
+    EXPECT_TRUE(contains(msg, expect)) << text << " -> " << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+  }
+}

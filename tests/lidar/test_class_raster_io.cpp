@@ -1,5 +1,6 @@
 // The rasters people look at: the GeoTIFF reads back through GDAL with the grid's georeference, the EPSG code,
-// the class codes and the colour table; the PNG has the raster plus its legend strip; bad paths name the file.
+// the class codes and the colour table; the PNG has the raster plus its legend strip; bad paths name the file;
+// the PNG row writer round-trips.
 #include <gtest/gtest.h>
 
 #include <gdal.h>
@@ -12,6 +13,7 @@
 #include "core/error.h"
 #include "io/image_io.h"
 #include "lidar/class_raster_io.h"
+#include "lidar/png_stream.h"
 
 namespace hf::lidar {
 namespace {
@@ -115,6 +117,77 @@ TEST(ClassRasterIo, BandWritersEqualTheWholeImageWriters) {
   ClassPngWriter short_png((dir / "short.png").string(), grid.width, grid.height);
   short_png.rows(band(classes, 0, 10));
   EXPECT_THROW(short_png.close(), hf::Error);
+  std::filesystem::remove_all(dir);
+}
+
+
+// The PNG rows as libpng writes them (lidar/png_stream.h): noise rows decode (OpenCV's reader) to exactly the pixels
+// written, in IDAT chunks of 64 KiB but the last; extra rows, a short close, an empty size, an unopenable path and
+// a full disk are hf::Errors naming the file.
+TEST(PngStream, RoundTripChunksAndErrors) {
+  const auto dir = std::filesystem::temp_directory_path() / ("hf_png_stream_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const int W = 301, H = 257;  // 232 KB of noise: at least three IDAT chunks
+  std::vector<Rgb8> pixels(size_t(W) * H);
+  std::uint32_t state = 11;
+  for (Rgb8& p : pixels) {
+    state = state * 1664525u + 1013904223u;
+    p = {std::uint8_t(state >> 24), std::uint8_t(state >> 16), std::uint8_t(state >> 8)};
+  }
+  const std::string path = (dir / "noise.png").string();
+  {
+    PngStream png(path, W, H);
+    for (int y = 0; y < H; ++y) png.row(&pixels[size_t(y) * W]);
+    EXPECT_THROW(png.row(pixels.data()), hf::Error);  // one row too many
+    png.close();
+  }
+  const ColorImage back = load_color(path);
+  ASSERT_EQ(back.width(), W);
+  ASSERT_EQ(back.height(), H);
+  EXPECT_EQ(back.pixels(), pixels);
+  // The chunks: signature, IHDR, IDAT..., IEND; every IDAT but the last exactly 64 KiB.
+  const std::string bytes = bytes_of(path);
+  ASSERT_EQ(bytes.compare(0, 8, "\x89PNG\r\n\x1a\n"), 0);
+  std::vector<std::string> types;
+  std::vector<std::uint32_t> idat;
+  for (size_t at = 8; at + 12 <= bytes.size();) {
+    std::uint32_t n = 0;
+    for (int i = 0; i < 4; ++i) n = n << 8 | std::uint8_t(bytes[at + size_t(i)]);
+    types.push_back(bytes.substr(at + 4, 4));
+    if (types.back() == "IDAT") idat.push_back(n);
+    at += 12 + n;
+  }
+  ASSERT_GE(idat.size(), 3u);
+  EXPECT_EQ(types.front(), "IHDR");
+  EXPECT_EQ(types.back(), "IEND");
+  for (size_t i = 0; i + 1 < idat.size(); ++i) EXPECT_EQ(idat[i], 65536u) << "IDAT " << i;
+  EXPECT_LE(idat.back(), 65536u);
+
+  const auto message = [](const auto& make) {
+    try {
+      make();
+    } catch (const hf::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string missing = (dir / "no_such_folder" / "x.png").string();
+  EXPECT_NE(message([&] { PngStream p(missing, 4, 4); }).find(missing + ": cannot open"), std::string::npos);
+  EXPECT_NE(message([&] { PngStream p(path, 0, 4); }).find(path + ": cannot write an empty PNG"), std::string::npos);
+  EXPECT_NE(message([&] {
+              PngStream p(path, W, H);
+              p.row(pixels.data());
+              p.close();
+            }).find(path + ": 1 of 257 rows written"),
+            std::string::npos);
+  if (std::filesystem::exists("/dev/full")) {  // every write fails with ENOSPC
+    EXPECT_NE(message([&] {
+                PngStream p("/dev/full", W, H);
+                for (int y = 0; y < H; ++y) p.row(&pixels[size_t(y) * W]);
+                p.close();
+              }).find("/dev/full: write failed"),
+              std::string::npos);
+  }
   std::filesystem::remove_all(dir);
 }
 

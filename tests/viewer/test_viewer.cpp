@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <thread>
 
 #include "../common/analytic_depth.h"
@@ -12,11 +13,13 @@
 #include "fusion/mesh.h"
 #include "fusion/raycast.h"
 #include "io/image_io.h"
+#include "io/ply.h"
 #include "viewer/gl_context.h"
 #include "viewer/mesh_renderer.h"
 #include "viewer/run_viewer.h"
 #include "viewer/sketch_window.h"
 #include "viewer/view_controller.h"
+#include "viewer/view_files.h"
 
 using namespace std::chrono_literals;
 
@@ -220,7 +223,8 @@ TEST(Viewer, ScreenshotIsTheModelRaycastWithTheFrustum) {
   follow.reset(pose);
   const hf::SE3 T_world_view = follow.T_world_view();
   const hf::fusion::RaycastResult cpu = hf::fusion::raycast(grid, camera, T_world_view, hf::viewer::model_view_options());
-  ASSERT_EQ(shot.width(), cpu.shaded.width());
+  const hf::ColorImage expected = hf::fusion::colored_shading(cpu);  // grey: the sphere was fused without colour
+  ASSERT_EQ(shot.width(), expected.width());
   ASSERT_GT(cpu.hit_count, 3000) << "the sphere should fill a good part of the view";
   // The frustum's pixels: each segment's projection in the view (both ends lie in front of it).
   const hf::viewer::Polyline frustum = hf::viewer::camera_frustum(camera, pose, 0.2, {240, 220, 40});
@@ -234,7 +238,7 @@ TEST(Viewer, ScreenshotIsTheModelRaycastWithTheFrustum) {
   }
   size_t differ = 0, yellow = 0;
   for (size_t i = 0; i < shot.size(); ++i) {
-    const hf::Rgb8 s = shot.pixels()[i], c = cpu.shaded.pixels()[i];
+    const hf::Rgb8 s = shot.pixels()[i], c = expected.pixels()[i];
     differ += s.r != c.r || s.g != c.g || s.b != c.b;
     yellow += s.r == 240 && s.g == 220 && s.b == 40;
   }
@@ -242,4 +246,125 @@ TEST(Viewer, ScreenshotIsTheModelRaycastWithTheFrustum) {
   EXPECT_GE(double(yellow), 0.5 * line_px) << "the frustum is not drawn";
   std::cout << "model view: " << cpu.hit_count << " surface pixels, " << differ << " differ from the CPU raycast, "
             << yellow << " frustum pixels (bound " << line_px << ")\n";
+}
+
+namespace {
+
+// An axis-aligned box as 12 triangles, every vertex of one colour.
+hf::TriangleMesh box_mesh(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, hf::Rgb8 colour) {
+  hf::TriangleMesh m;
+  for (int k = 0; k < 8; ++k) {
+    m.vertices.emplace_back((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z());
+    m.colors.push_back(colour);
+  }
+  const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : faces) {
+    m.triangles.emplace_back(f[0], f[1], f[2]);
+    m.triangles.emplace_back(f[0], f[2], f[3]);
+  }
+  return m;
+}
+
+}  // namespace
+
+// view of a bare mesh (no saved camera): the view looks at the bounding box's centre (it projects to the principal
+// point) from outside, and every corner of the box projects inside the image, within the 5 % margin and touching
+// it on some side (so the mesh is not a speck); for boxes far from the origin, flat, tall and long.
+TEST(Viewer, FrameMeshKeepsTheWholeBoxInView) {
+  const hf::PinholeCamera camera = hf::PinholeCamera::preset("ros");
+  const std::pair<Eigen::Vector3f, Eigen::Vector3f> boxes[] = {
+      {{4, -3, 7}, {6, -2, 10}},       // off the origin, behind nothing: the old view looked past it
+      {{-2, 0, -2}, {2, 0.01f, 2}},    // a floor
+      {{0, -5, 0}, {0.2f, 5, 0.2f}},   // a pole
+      {{-50, -1, 3}, {50, 1, 4}},      // a long wall
+      {{1, 1, 1}, {1.2f, 1.1f, 1.1f}},  // a small thing
+  };
+  for (const auto& [lo, hi] : boxes) {
+    const hf::TriangleMesh mesh = box_mesh(lo, hi, {200, 200, 200});
+    const hf::SE3 T = hf::viewer::frame_mesh(mesh, camera);
+    const Eigen::Vector3d centre = T.inverse() * (0.5f * (lo + hi)).cast<double>();
+    ASSERT_GT(centre.z(), 0.0);
+    const Eigen::Vector2d c = camera.project(centre);
+    EXPECT_NEAR(c.x(), camera.cx, 1e-3);  // SE3 keeps the rotation as a quaternion: rounding of 1e-7 rad
+    EXPECT_NEAR(c.y(), camera.cy, 1e-3);
+    double slack = 1e9;  // the least distance of a corner to the margin
+    for (const Eigen::Vector3f& v : mesh.vertices) {
+      const Eigen::Vector3d p = T.inverse() * v.cast<double>();
+      ASSERT_GT(p.z(), 0.0) << "a corner behind the camera";
+      const Eigen::Vector2d u = camera.project(p);
+      const double mx = 0.05 * camera.width, my = 0.05 * camera.height;
+      EXPECT_GE(u.x(), mx - 1e-3);
+      EXPECT_LE(u.x(), camera.width - 1 - mx + 1e-3);
+      EXPECT_GE(u.y(), my - 1e-3);
+      EXPECT_LE(u.y(), camera.height - 1 - my + 1e-3);
+      slack = std::min({slack, u.x() - mx, camera.width - 1 - mx - u.x(), u.y() - my, camera.height - 1 - my - u.y()});
+    }
+    EXPECT_LT(slack, 1.0) << "the box could be shown larger";
+  }
+  EXPECT_THROW(hf::viewer::frame_mesh(hf::TriangleMesh(), camera), hf::Error);
+}
+
+// Which way a bare mesh is seen: a room corner scanned from its open side (a 4 x 4 m floor and a 4 x 3 m back wall,
+// both facing the scanner) shows its floor at the bottom of the picture and is seen from the open side, both in
+// hashfusion's y-down world and in a z-up (TUM motion-capture) world.
+TEST(Viewer, FrameMeshLooksFromTheScannedSideWithTheFloorDown) {
+  const hf::PinholeCamera camera = hf::PinholeCamera::preset("ros");
+  for (const bool z_up : {false, true}) {
+    // y-down: floor at y = 1.5 facing -y (up), wall at z = 4 facing -z (towards the scanner at the origin).
+    hf::TriangleMesh m;
+    const auto quad = [&](Eigen::Vector3f a, Eigen::Vector3f b, Eigen::Vector3f c, Eigen::Vector3f d) {
+      const int i = int(m.vertices.size());
+      for (const Eigen::Vector3f& v : {a, b, c, d}) m.vertices.push_back(v);
+      m.triangles.emplace_back(i, i + 1, i + 2);
+      m.triangles.emplace_back(i, i + 2, i + 3);
+    };
+    quad({-2, 1.5f, 0}, {2, 1.5f, 0}, {2, 1.5f, 4}, {-2, 1.5f, 4});      // normal (b-a)x(c-a) = -y
+    quad({-2, 1.5f, 4}, {2, 1.5f, 4}, {2, -1.5f, 4}, {-2, -1.5f, 4});    // normal -z
+    Eigen::Matrix3f to_world = Eigen::Matrix3f::Identity();
+    if (z_up) to_world << 1, 0, 0, 0, 0, 1, 0, -1, 0;  // y-down camera world -> z-up: (x, y, z) -> (x, z, -y)
+    for (Eigen::Vector3f& v : m.vertices) v = to_world * v;
+    const Eigen::Vector3f n_floor = to_world * Eigen::Vector3f(0, -1, 0), n_wall = to_world * Eigen::Vector3f(0, 0, -1);
+    const hf::SE3 T = hf::viewer::frame_mesh(m, camera);
+    const Eigen::Matrix3d R = T.rotation();  // columns: the camera's x, y (image down), z (forward) in the world
+    EXPECT_GT(R.col(1).dot(-n_floor.cast<double>()), 0.8) << "the floor is not at the bottom (z_up " << z_up << ")";
+    EXPECT_GT(R.col(2).dot(-n_wall.cast<double>()), 0.7) << "not seen from the scanned side (z_up " << z_up << ")";
+  }
+}
+
+// `view mesh.ply --screenshot` of a coloured box far from the origin: the whole box in the picture (surface pixels,
+// none on the border), in its vertex colour modulated by the shading (red-dominant); the same box with black
+// vertices (no colour fused) is grey. Needs OpenGL (EGL or xvfb-run); skips with a message without.
+TEST(Viewer, ScreenshotOfABareMeshFramesItInItsColours) {
+  const std::string dir = ::testing::TempDir() + "/hf_view_frame";
+  std::filesystem::create_directories(dir);
+  hf::viewer::ViewFilesOptions options;
+  options.camera = centred_camera(160, 120, 130.0);
+  for (const hf::Rgb8 colour : {hf::Rgb8{220, 40, 30}, hf::Rgb8{0, 0, 0}}) {
+    hf::write_ply(dir + "/box.ply", box_mesh({3, -2, 6}, {4, -1.5f, 7.5f}, colour));
+    options.screenshot = dir + "/box.png";
+    try {
+      hf::viewer::view_files(dir + "/box.ply", options);
+    } catch (const hf::Error& e) {
+      GTEST_SKIP() << "no display or EGL for OpenGL: " << e.what();
+    }
+    const hf::ColorImage shot = hf::load_color(options.screenshot);
+    ASSERT_EQ(shot.width(), 160);
+    int surface = 0, border = 0, dominant = 0, grey = 0;
+    for (int y = 0; y < shot.height(); ++y)
+      for (int x = 0; x < shot.width(); ++x) {
+        const hf::Rgb8 p = shot(x, y);
+        if (p.r == 0 && p.g == 0 && p.b == 0) continue;
+        ++surface;
+        border += x < 2 || y < 2 || x >= shot.width() - 2 || y >= shot.height() - 2;
+        dominant += p.r > 2 * p.g && p.r > 2 * p.b;
+        grey += p.r == p.g && p.g == p.b;
+      }
+    EXPECT_GT(surface, 160 * 120 / 10) << "the box should fill a good part of the view";
+    EXPECT_EQ(border, 0) << "the box reaches the image border: not all of it is in view";
+    if (colour.r > 0)
+      EXPECT_EQ(dominant, surface) << "a red box should render red";
+    else
+      EXPECT_EQ(grey, surface) << "a box without colour should render grey";
+  }
+  std::filesystem::remove_all(dir);
 }
