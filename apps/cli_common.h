@@ -3,6 +3,7 @@
 //     std::to_string of DBL_MAX (309 digits);
 //   - deprecated spellings of renamed options: still accepted, with a one-line notice on stderr naming the new one
 //     (scripts and the commands committed in bench/results keep running);
+//   - the output folder: `--out DIR`, default `out/SUBCOMMAND` in every subcommand that writes files;
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -56,6 +57,13 @@ inline CLI::Validator non_negative() {
 // The ranges two subcommands share (run and bench): one definition, so they cannot differ.
 inline CLI::Validator voxel_m_range() { return in_range(1e-4, 10.0, "m"); }
 inline CLI::Validator tracking_level_range() { return in_range(0, 2); }
+
+// `--out` of a subcommand that writes files: default "out/NAME" (NAME the subcommand's), shown by --help as
+// "--out TEXT=out/NAME", so `hashfusion NAME` with no --out writes where every other subcommand would put its own.
+inline CLI::Option* add_out_option(CLI::App* cmd, std::string& variable, const std::string& description) {
+  variable = "out/" + cmd->get_name();
+  return cmd->add_option("--out", variable, description)->capture_default_str();
+}
 
 // `old_name` as a hidden alias of the option `new_name` writing `variable`: accepted, with the notice
 // "hashfusion: OLD is deprecated; use NEW" on stderr. The two exclude each other.

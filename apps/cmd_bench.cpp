@@ -29,7 +29,7 @@ struct BenchCliOptions {
   std::string registration = "all";
   std::string peers = "all";
   std::string loop_closure = "on";
-  std::string out = "out/bench";
+  std::string out;  // --out: out/bench unless given (add_out_option)
   double voxel_m = 0.01;
   std::string backend = "cpu";
   long max_frames = 0;
@@ -163,7 +163,7 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--loop-closure", opts->loop_closure,
                   "loop-closure modes each registration runs in: all, or a list of off, on, global (run --global)")
       ->capture_default_str();
-  cmd->add_option("--out", opts->out, "output folder")->capture_default_str();
+  add_out_option(cmd, opts->out, "output folder");
   cmd->add_option("--shard", opts->shard,
                   "K/N: run only slice K (from 0) of N of the runs --list-runs lists (a job array task; "
                   "`bench --merge` of the N --out folders in K order gives the single run's tables)");

@@ -125,7 +125,7 @@ void add_generate_command(CLI::App& app) {
   cmd->add_option("--frames", args->frames, "Number of frames (30 Hz)")->capture_default_str();
   cmd->add_option("--seed", args->seed, "Sensor-noise seed; the same seed gives identical files")
       ->capture_default_str();
-  cmd->add_option("--out", args->out, "Output folder (must not exist unless --force)")->required();
+  add_out_option(cmd, args->out, "Output folder (must not exist unless --force)");
   cmd->add_option("--camera", args->camera, "Camera preset name or camera file (resolution and intrinsics)")->capture_default_str();
   cmd->add_flag("--no-noise", args->no_noise, "Exact depth and colour: no sensor model");
   cmd->add_flag("--force", args->force, "Replace an existing output folder (only one a previous generate wrote)");

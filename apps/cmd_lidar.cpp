@@ -263,7 +263,7 @@ void add_lidar_command(CLI::App& app) {
   auto args = std::make_shared<LidarArgs>();
   CLI::App* cmd = app.add_subcommand("lidar", "classify built-up areas (hamlet / village / town / city) in LiDAR point clouds");
   cmd->add_option("--input", args->inputs, "LAS 1.0-1.4 files (LAZ must be decompressed first), or synthetic:SEED");
-  cmd->add_option("--out", args->out, "output folder")->required();
+  add_out_option(cmd, args->out, "output folder");
   cmd->add_option("--cell-m", args->cell_m, "grid resolution r in metres")->capture_default_str();
   auto* t = cmd->add_option("--t-m-per-m", args->t_s, "t^S: dilation radius (m) per metre of building height")
                 ->capture_default_str();

@@ -41,7 +41,7 @@ namespace {
 
 struct RunOptions {
   std::string input = "synthetic:room";
-  std::string out = "out/run";
+  std::string out;  // --out: out/run unless given (add_out_option)
   std::string registration = "combined";
   std::string backend = "cpu";
   std::string camera;
@@ -292,7 +292,7 @@ void add_run_command(CLI::App& app) {
                   "synthetic:PRESET, a TUM RGB-D folder, a 7-Scenes folder, or live: openni2://[URI], FILE.oni, "
                   "v4l2:///dev/videoN[+/dev/videoM], libcamera://[ID] (`hashfusion devices` lists them)")
       ->capture_default_str();
-  cmd->add_option("--out", opts->out, "output folder")->capture_default_str();
+  add_out_option(cmd, opts->out, "output folder");
   cmd->add_option("--registration", opts->registration, "registration method, or groundtruth (fusion only)")
       ->capture_default_str();
   cmd->add_option("--backend", opts->backend, "reduction backend: cpu | opencl")->capture_default_str();

@@ -61,6 +61,15 @@ cli_errors)  # every argument error: exit 1 and one short line (not CLI11's 104-
   check_error head-features --out o
   grep -q "head-features: --input MESH is required" log || fail "$(cat log)"
   [ ! -e o ] || fail "an argument error created o"
+  # every subcommand that writes files takes --out, by default out/SUBCOMMAND; CLI11 prints it as
+  # "  --out TEXT=out/run  output folder" (the description on the next line when the default is long)
+  for sub in run generate bench lidar head-features model record; do
+    "$HF" $sub --help > help.txt 2>&1 || fail "$sub --help: exit $?"
+    grep -Eq -- "^ +--out TEXT=out/$sub( |$)" help.txt || fail "$sub --help: $(grep -- --out help.txt)"
+  done
+  # and writes there when --out is not given (generate: the quickest of them)
+  timeout 120 "$HF" generate --frames 1 --camera cam.txt > log 2>&1 || fail "generate without --out: $(cat log)"
+  [ -s out/generate/groundtruth.txt ] || fail "generate without --out wrote no out/generate: $(cat log)"
   ;;
 version)  # hashfusion --version: the version and the commit built from
   "$HF" --version > log 2>&1 || fail "exit $?: $(cat log)"
