@@ -57,6 +57,10 @@ inline CLI::Validator non_negative() {
 // The ranges two subcommands share (run and bench): one definition, so they cannot differ.
 inline CLI::Validator voxel_m_range() { return in_range(1e-4, 10.0, "m"); }
 inline CLI::Validator tracking_level_range() { return in_range(0, 2); }
+// Frames of a synthetic sequence (run --synthetic-frames, generate --frames; bench's needs 2 for a trajectory).
+inline CLI::Validator synthetic_frames_range(double lo = 1) { return in_range(lo, 100000, "frames"); }
+// A noise seed (run, generate): an unsigned 64-bit number; CLI11 alone wraps "-1" to 18446744073709551615.
+inline CLI::Validator seed_range() { return in_range(0, 18446744073709551615.0); }
 
 // `--out` of a subcommand that writes files: default "out/NAME" (NAME the subcommand's), shown by --help as
 // "--out TEXT=out/NAME", so `hashfusion NAME` with no --out writes where every other subcommand would put its own.

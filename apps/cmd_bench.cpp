@@ -34,6 +34,7 @@ struct BenchCliOptions {
   std::string backend = "cpu";
   long max_frames = 0;
   int synthetic_frames = 300;
+  std::uint64_t seed = 0;
   float peer_voxel_m = 0.04f;
   float ndt_resolution_m = 0.2f;
   int peer_pixel_stride = 2;
@@ -108,6 +109,7 @@ void run_bench_command(const BenchCliOptions& c) {
   o.tracking_level = c.tracking_level;
   o.max_frames = c.max_frames;
   o.synthetic_frames = c.synthetic_frames;
+  o.seed = c.seed;
   o.peer.voxel_m = c.peer_voxel_m;
   o.peer.ndt_resolution_m = c.ndt_resolution_m;
   o.peer.pixel_stride = c.peer_pixel_stride;
@@ -180,8 +182,9 @@ void add_bench_command(CLI::App& app) {
       ->check(non_negative())
       ->capture_default_str();
   cmd->add_option("--synthetic-frames", opts->synthetic_frames, "frames rendered per synthetic preset")
-      ->check(in_range(2, 100000))
+      ->check(synthetic_frames_range(2))
       ->capture_default_str();
+  cmd->add_option("--seed", opts->seed, "noise seed of the synthetic: inputs")->check(seed_range())->capture_default_str();
   cmd->add_option("--peer-voxel-m", opts->peer_voxel_m, "voxel-grid size of the peers' clouds in metres")
       ->check(positive())
       ->capture_default_str();
@@ -213,6 +216,7 @@ void add_bench_command(CLI::App& app) {
     if (!opts->config_file.empty()) line += " --config " + quote_arg(opts->config_file);
     if (!opts->shard.empty()) line += " --shard " + quote_arg(opts->shard);
     if (opts->tracking_level >= 0) line += " --tracking-level " + std::to_string(opts->tracking_level);
+    if (opts->seed != 0) line += " --seed " + std::to_string(opts->seed);
     opts->command_line = line;
     run_bench_command(*opts);
   });

@@ -122,8 +122,10 @@ void add_generate_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "generate", "Write a synthetic RGB-D sequence with exact ground truth as a TUM RGB-D folder");
   cmd->add_option("--preset", args->preset, "Scene and trajectory: " + names)->capture_default_str();
-  cmd->add_option("--frames", args->frames, "Number of frames (30 Hz)")->capture_default_str();
+  cmd->add_option("--frames", args->frames, "Number of frames (30 Hz)")->check(synthetic_frames_range())
+      ->capture_default_str();
   cmd->add_option("--seed", args->seed, "Sensor-noise seed; the same seed gives identical files")
+      ->check(seed_range())
       ->capture_default_str();
   add_out_option(cmd, args->out, "Output folder (must not exist unless --force)");
   cmd->add_option("--camera", args->camera, "Camera preset name or camera file (resolution and intrinsics)")->capture_default_str();

@@ -324,9 +324,9 @@ void add_run_command(CLI::App& app) {
       ->check(in_range(1, double(size_t(1) << 26), "blocks"));
   cmd->add_option("--max-frames", opts->max_frames, "stop after N frames (0 = all)")->check(non_negative());
   cmd->add_option("--synthetic-frames", opts->synthetic_frames, "frames of a synthetic: input")
-      ->check(in_range(1, 100000))
+      ->check(synthetic_frames_range())
       ->capture_default_str();
-  cmd->add_option("--seed", opts->seed, "noise seed of a synthetic: input")->capture_default_str();
+  cmd->add_option("--seed", opts->seed, "noise seed of a synthetic: input")->check(seed_range())->capture_default_str();
   cmd->add_option("--save-map", opts->save_map,
                   "also write the map (the TSDF volume, fusion/volume_io.h; no keyframes) to FILE, by default "
                   "map.hfmap in --out; written with the other outputs, also after Ctrl-C / SIGTERM")

@@ -60,6 +60,23 @@ cli_errors)  # every argument error: exit 1 and one short line (not CLI11's 104-
   check_error model --acceptance 2 --out o
   check_error head-features --out o
   grep -q "head-features: --input MESH is required" log || fail "$(cat log)"
+  # a seed is unsigned (CLI11 alone wraps -1 to 2^64 - 1); synthetic frame counts share one range
+  for sub in run generate bench; do
+    check_error $sub --seed=-1 --input synthetic:room --out o
+    grep -q -- "--seed: expected 0..1.84467e+19, got -1" log || fail "$sub seed: $(cat log)"
+  done
+  check_error generate --frames 200000 --out o
+  grep -q -- "--frames: expected 1..100000 frames, got 200000" log || fail "generate frames: $(cat log)"
+  check_error run --synthetic-frames 200000 --out o
+  grep -q -- "--synthetic-frames: expected 1..100000 frames, got 200000" log || fail "run frames: $(cat log)"
+  # lidar: ranges checked before any point is read (1e308 failed deep in the clustering operator)
+  check_error lidar --input synthetic:1 --cell-m=-1e308 --out o
+  check_error lidar --input synthetic:1 --t-m-per-m 1e308 --out o
+  grep -q -- "--t-m-per-m: expected 0..1000 m per m, got 1e+308" log || fail "lidar t: $(cat log)"
+  check_error lidar --input synthetic:1 --sweep-t 1,1e308 --out o
+  grep -q -- "--sweep-t: expected 0..1000 m per m, got 1e+308" log || fail "lidar sweep: $(cat log)"
+  check_error lidar --input synthetic:-3 --out o
+  grep -q -- "synthetic:SEED: expected a whole number" log || fail "lidar seed: $(cat log)"
   [ ! -e o ] || fail "an argument error created o"
   # every subcommand that writes files takes --out, by default out/SUBCOMMAND; CLI11 prints it as
   # "  --out TEXT=out/run  output folder" (the description on the next line when the default is long)
