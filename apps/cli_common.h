@@ -80,6 +80,9 @@ CLI::Option* add_deprecated_alias(CLI::App* cmd, CLI::Option* current, const std
     std::cerr << "hashfusion: " << old_name << " is deprecated; use " << new_name << "\n";
   });
   old->excludes(current);
+  // One direction enforces it (CLI11 checks each option's own list); the other would print a dangling "Excludes: "
+  // after the new option in --help, naming the hidden alias by an empty string.
+  current->remove_excludes(old);
   return old;
 }
 

@@ -15,6 +15,7 @@
 #include "apps/cli_common.h"
 #include "apps/commands.h"
 #include "apps/interrupt.h"
+#include "apps/registration_list.h"
 #include "bench/harness/harness.h"
 #include "core/bounded_read.h"
 #include "core/error.h"
@@ -157,7 +158,7 @@ void add_bench_command(CLI::App& app) {
                   "instead of running: combine the results.json of these earlier --out folders into --out (a later "
                   "folder's row replaces an earlier one of the same method and input)")
       ->expected(1, -1);
-  cmd->add_option("--registration", opts->registration, "all, or a comma-separated list of registration methods")
+  cmd->add_option("--registration", opts->registration, "all, or a comma-separated list of registration methods: " + registration_list())
       ->capture_default_str();
   cmd->add_option("--peers", opts->peers, "peers: all, none, or a comma-separated list of gicp, ndt (PCL), o3d-icp, o3d-colored-icp, o3d-rgbd "
                   "(Open3D, where built)")

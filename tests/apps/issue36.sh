@@ -26,6 +26,15 @@ readme)  # the README opens with its title and summary, then exactly the two com
   # status table: one short line per part, each under 160 characters
   awk '/^## Status/{s=1; next} s && /^## /{exit} s && /^\|/ && length($0) > 160 {print; bad=1} END{exit bad}' \
     "$SRC/README.md" || fail "a status row longer than 160 characters"
+  # the synopsis and run --help name every registration method the registry knows
+  known=$("$HF" config --registration no-such 2>&1 | sed -n 's/.*(known: \(.*\))$/\1/p' | tr -d ,)
+  [ -n "$known" ] || fail "no list of registration methods"
+  synopsis=$(grep -m1 -- '--registration combined|' "$SRC/README.md")
+  "$HF" run --help > help.txt
+  for m in $known; do
+    printf '%s\n' "$synopsis" | grep -q -- "[[| ]$m[]|]" || fail "the README's synopsis lacks $m: $synopsis"
+    grep -A3 -- "--registration" help.txt | grep -q -- "[ :]$m[,]\?" || fail "run --help lacks $m"
+  done
   grep -q "Redistribution and use in source and binary forms" "$SRC/LICENSE" || fail "LICENSE is not BSD 3-Clause"
   grep -q "the hashfusion authors" "$SRC/LICENSE" || fail "LICENSE names no copyright holder"
   # every package of the list (build tools aside) is named in THIRD_PARTY.md with its licence
@@ -80,6 +89,10 @@ cli_errors)  # every argument error: exit 1 and one short line (not CLI11's 104-
   [ ! -e o ] || fail "an argument error created o"
   # every subcommand that writes files takes --out, by default out/SUBCOMMAND; CLI11 prints it as
   # "  --out TEXT=out/run  output folder" (the description on the next line when the default is long)
+  for sub in eval lidar generate head-features model; do  # a hidden deprecated alias leaves no "Excludes: " behind
+    "$HF" $sub --help > help.txt 2>&1 || fail "$sub --help: exit $?"
+    ! grep -Eq "Excludes: ?([^-]|$)" help.txt || fail "$sub --help: $(grep -E "Excludes: ?([^-]|$)" help.txt)"
+  done
   for sub in run generate bench lidar head-features model record; do
     "$HF" $sub --help > help.txt 2>&1 || fail "$sub --help: exit $?"
     grep -Eq -- "^ +--out TEXT=out/$sub( |$)" help.txt || fail "$sub --help: $(grep -- --out help.txt)"
@@ -95,7 +108,7 @@ version)  # hashfusion --version: the version and the commit built from
 report)  # report.json: provenance, a structured camera, floats shortest; --config takes a whole report.json
   timeout 300 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 3 --out a > log 2>&1 ||
     fail "run: $(tail -3 log)"
-  python3 - a/report.json "$("$HF" --version)" <<'PY' || fail "report.json"
+  python3 - a/report.json "$("$HF" --version)" "$SRC/docs/report.md" <<'PY' || fail "report.json"
 import json, re, sys
 j = json.load(open(sys.argv[1]))
 version = sys.argv[2].split()[1]
@@ -111,6 +124,11 @@ ro = j["config"]["registration_options"]
 assert ro["max_dist_m"] == 0.1 and ro["rgb_weight"] == 0.4, ro
 text = json.dumps(j["config"])  # each number as Python reads it back, shortest form
 assert "0000000" not in text and "9999999" not in text, text
+# docs/report.md names every field (and every field of the per-frame rows and the colour check)
+doc = open(sys.argv[3]).read()
+fields = list(j) + list(j["per_frame"][0]) + list(j["colour_check"])
+missing = [k for k in fields if "`%s`" % k not in doc]
+assert not missing, "docs/report.md does not list %s" % missing
 PY
   # the whole report.json as --config repeats the run's configuration
   timeout 300 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 3 --config a/report.json \
@@ -157,6 +175,16 @@ maps)  # run --save-map / --save-cloud / --load-map: written with the outputs (a
   [ $? = 1 ] || fail "a map of 2 cm voxels loaded into a 1 cm configuration"
   grep -q "a/map.hfmap: load_map: the map has voxels of 0.02 m" log || fail "$(cat log)"
   [ "$(grep -c "^hashfusion:" log)" = 1 ] || fail "expected one error line: $(cat log)"  # besides input: / camera:
+  # a FILE outside --out that cannot be written fails before the first frame (it is written last), in one line
+  timeout 60 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 20 --save-map "$ROOT/none/m.hfmap" \
+    --out f > log 2>&1
+  [ $? = 1 ] && [ "$(wc -l < log)" = 1 ] || fail "a map into a missing folder: $(cat log)"
+  grep -qx "hashfusion: --save-map: $ROOT/none/m.hfmap: no folder $ROOT/none" log || fail "$(cat log)"
+  timeout 60 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 20 --save-cloud "$ROOT/c.xyz" \
+    --out f > log 2>&1
+  [ $? = 1 ] && [ "$(wc -l < log)" = 1 ] || fail "a cloud of another type: $(cat log)"
+  grep -q -- "--save-cloud: $ROOT/c.xyz: expected a file name ending in .ply or .pcd" log || fail "$(cat log)"
+  [ ! -e f ] || fail "a refused --save-map / --save-cloud left f"
   printf 'not a map' > bad.hfmap
   timeout 60 "$HF" run --input synthetic:room --camera cam.txt --load-map bad.hfmap --out d > log 2>&1
   [ $? = 1 ] && grep -q "bad.hfmap" log || fail "a bad map: $(cat log)"
