@@ -163,6 +163,22 @@ maps)  # run --save-map / --save-cloud / --load-map: written with the outputs (a
   head -c 300 c.pcd | grep -q "^FIELDS x y z" || fail "c.pcd: $(head -c 200 c.pcd)"
   head -c 300 c.pcd | grep -q "normal_x" && head -c 300 c.pcd | grep -q "rgb" || fail "c.pcd fields: $(head -5 c.pcd)"
   cmp m.hfmap a/map.hfmap || fail "the same run saved another map"
+  # Open3D, where installed, reads both with colour and unit normals, the same points
+  if /usr/bin/python3 -c "import open3d" 2> /dev/null; then
+    /usr/bin/python3 - a/cloud.ply c.pcd <<'PY' || fail "Open3D read the clouds differently"
+import sys
+import numpy as np
+import open3d as o3d
+ply, pcd = (o3d.io.read_point_cloud(p) for p in sys.argv[1:])
+for c in (ply, pcd):
+    assert len(c.points) > 1000 and c.has_colors() and c.has_normals(), c
+    assert np.allclose(np.linalg.norm(np.asarray(c.normals), axis=1), 1, atol=1e-5)
+assert np.array_equal(np.asarray(ply.points), np.asarray(pcd.points))
+assert np.abs(np.asarray(ply.colors) - np.asarray(pcd.colors)).max() <= 1 / 255 + 1e-9
+PY
+  else
+    echo "skipped: the Open3D round trip (python3-open3d not installed)"
+  fi
   [ ! -e b/m.hfmap ] || fail "a path was put into --out"
   # continuing in the map: the synthetic frames start at their ground truth, so the run tracks from the first frame
   timeout 300 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 4 --voxel-m 0.02 \
