@@ -63,6 +63,8 @@ cli_errors)  # every argument error: exit 1 and one short line (not CLI11's 104-
   grep -q "expected a finite number > 0, got -1e+308" log || fail "peer voxel: $(cat log)"
   check_error bench --voxel-m 20 --input synthetic:room --out o  # the same range as run's
   grep -q -- "--voxel-m: expected 0.0001..10 m, got 20" log || fail "bench voxel range: $(cat log)"
+  check_error run --backend cuda --out o  # refused with the configuration, before the input is opened
+  grep -q "unknown reduction backend 'cuda' (known: cpu, opencl)" log || fail "backend: $(cat log)"
   check_error record --frames 0 --out o
   check_error eval --est x.txt
   check_error eval --gt a --est b --delta-s 0
