@@ -56,6 +56,10 @@ template <class Sequence>
 void write_folder(const Sequence& sequence, int frames, const GenerateArgs& a) {
   datasets::TumWriteOptions write;
   write.overwrite = a.force;
+  // Said here with the flag that replaces it: `hashfusion generate` twice writes out/generate twice.
+  std::error_code ec;
+  if (!a.force && std::filesystem::exists(std::filesystem::symlink_status(a.out, ec)))
+    throw Error(a.out + ": already exists (choose another --out, or --force to replace an earlier generate's output)");
   InterruptGuard guard;
   Progress progress("generate", frames);
   write.progress = [&](int done, int) {

@@ -102,6 +102,9 @@ cli_errors)  # every argument error: exit 1 and one short line (not CLI11's 104-
   # and writes there when --out is not given (generate: the quickest of them)
   timeout 120 "$HF" generate --frames 1 --camera cam.txt > log 2>&1 || fail "generate without --out: $(cat log)"
   [ -s out/generate/groundtruth.txt ] || fail "generate without --out wrote no out/generate: $(cat log)"
+  check_error generate --frames 1 --camera cam.txt  # a second time: names --force
+  grep -q "out/generate: already exists (choose another --out, or --force to replace" log || fail "$(cat log)"
+  timeout 120 "$HF" generate --frames 1 --camera cam.txt --force > log 2>&1 || fail "generate --force: $(cat log)"
   ;;
 version)  # hashfusion --version: the version and the commit built from
   "$HF" --version > log 2>&1 || fail "exit $?: $(cat log)"
