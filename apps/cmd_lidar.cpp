@@ -66,7 +66,7 @@ std::function<bool(const std::string&)> previous_lidar_run_wrote(const std::stri
   return [names](const std::string& name) { return names.count(name) > 0; };
 }
 
-// The largest t^S taken (--t-m-per-m, --sweep-t): radii of a kilometre per metre of height already cover any grid;
+// The largest t^S taken (--t-m-per-m, --sweep-t-m-per-m): radii of a kilometre per metre of height already cover any grid;
 // beyond, the radius in cells overflows (1e308 failed deep in the clustering operator).
 constexpr double kMaxTMPerM = 1000.0;
 
@@ -85,12 +85,12 @@ std::vector<double> numbers(const std::string& text, const std::string& option) 
   return v;
 }
 
-// --sweep-t's values, each in --t-m-per-m's range.
+// --sweep-t-m-per-m's values, each in --t-m-per-m's range.
 std::vector<double> sweep_values(const std::string& text) {
-  std::vector<double> v = numbers(text, "--sweep-t");
+  std::vector<double> v = numbers(text, "--sweep-t-m-per-m");
   for (double t : v)
     if (!(t >= 0 && t <= kMaxTMPerM))
-      throw Error("--sweep-t: expected 0.." + number_for_message(kMaxTMPerM) + " m per m, got " + number_for_message(t));
+      throw Error("--sweep-t-m-per-m: expected 0.." + number_for_message(kMaxTMPerM) + " m per m, got " + number_for_message(t));
   return v;
 }
 
@@ -295,7 +295,8 @@ void add_lidar_command(CLI::App& app) {
   cmd->add_option("--footprints", args->footprints, "building footprints (any GDAL vector format) to validate the building mask");
   cmd->add_option("--footprint-layer", args->footprint_layer, "layer of --footprints (default: the first)");
   cmd->add_option("--epsg", args->epsg, "CRS of the outputs when the LAS files do not state it");
-  cmd->add_option("--sweep-t", args->sweep, "sensitivity analysis over t^S, e.g. 0.5,1,1.5,2,3");
+  auto* sweep = cmd->add_option("--sweep-t-m-per-m", args->sweep, "sensitivity analysis over t^S, e.g. 0.5,1,1.5,2,3");
+  add_deprecated_alias(cmd, sweep, "--sweep-t", args->sweep);
   cmd->add_option("--tiles", args->tiles, "tiled run: NX,NY tiles over the inputs' grid (with --tile)");
   cmd->add_option("--tile", args->tile, "the tile (0..NX*NY-1) this process computes; writes OUT/tile_K.hflt");
   cmd->add_option("--merge", args->merge, "merge the tile_*.hflt files of this folder into the final outputs");

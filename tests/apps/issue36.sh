@@ -84,8 +84,8 @@ cli_errors)  # every argument error: exit 1 and one short line (not CLI11's 104-
   check_error lidar --input synthetic:1 --cell-m=-1e308 --out o
   check_error lidar --input synthetic:1 --t-m-per-m 1e308 --out o
   grep -q -- "--t-m-per-m: expected 0..1000 m per m, got 1e+308" log || fail "lidar t: $(cat log)"
-  check_error lidar --input synthetic:1 --sweep-t 1,1e308 --out o
-  grep -q -- "--sweep-t: expected 0..1000 m per m, got 1e+308" log || fail "lidar sweep: $(cat log)"
+  check_error lidar --input synthetic:1 --sweep-t-m-per-m 1,1e308 --out o
+  grep -q -- "--sweep-t-m-per-m: expected 0..1000 m per m, got 1e+308" log || fail "lidar sweep: $(cat log)"
   check_error lidar --input synthetic:-3 --out o
   grep -q -- "synthetic:SEED: expected a whole number" log || fail "lidar seed: $(cat log)"
   [ ! -e o ] || fail "an argument error created o"
@@ -154,6 +154,16 @@ aliases)  # the old spellings still run, with a one-line deprecation notice nami
   cmp new.json now.json || fail "the aliases gave another result"
   timeout 60 "$HF" eval --gt t.txt --est t.txt --max-difference 0.02 --max-difference-s 0.02 > /dev/null 2> log
   [ $? = 1 ] || fail "an option and its alias together were accepted"
+  # lidar's: the same outputs (the input's path aside, which names the folder)
+  timeout 120 "$HF" lidar --input synthetic:1 --t 2 --areas 50000,1000000,5000000 --sweep-t 1,2 --out lo > /dev/null \
+    2> log || fail "lidar with the old spellings: $(cat log)"
+  for o in t areas sweep-t; do
+    grep -q "^hashfusion: --$o is deprecated; use --$o-m" log || fail "no notice for --$o: $(cat log)"
+  done
+  timeout 120 "$HF" lidar --input synthetic:1 --t-m-per-m 2 --areas-m2 50000,1000000,5000000 --sweep-t-m-per-m 1,2 \
+    --out ln > /dev/null 2> log || fail "lidar: $(cat log)"
+  for f in classes.tif buildings.png classes.png synthetic.las; do cmp lo/$f ln/$f || fail "lidar aliases: $f differs"; done
+  sed 's#lo/synthetic.las#ln/synthetic.las#' lo/report.json | cmp - ln/report.json || fail "lidar aliases: report.json"
   ;;
 maps)  # run --save-map / --save-cloud / --load-map: written with the outputs (also on SIGTERM), read back
   timeout 300 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 4 --voxel-m 0.02 --save-map \
