@@ -15,6 +15,7 @@
 #include "apps/cli_common.h"
 #include "apps/commands.h"
 #include "apps/interrupt.h"
+#include "apps/registration_list.h"
 #include "bench/harness/harness.h"
 #include "core/bounded_read.h"
 #include "core/error.h"
@@ -29,11 +30,12 @@ struct BenchCliOptions {
   std::string registration = "all";
   std::string peers = "all";
   std::string loop_closure = "on";
-  std::string out = "out/bench";
+  std::string out;  // --out: out/bench unless given (add_out_option)
   double voxel_m = 0.01;
   std::string backend = "cpu";
   long max_frames = 0;
   int synthetic_frames = 300;
+  std::uint64_t seed = 0;
   float peer_voxel_m = 0.04f;
   float ndt_resolution_m = 0.2f;
   int peer_pixel_stride = 2;
@@ -108,6 +110,7 @@ void run_bench_command(const BenchCliOptions& c) {
   o.tracking_level = c.tracking_level;
   o.max_frames = c.max_frames;
   o.synthetic_frames = c.synthetic_frames;
+  o.seed = c.seed;
   o.peer.voxel_m = c.peer_voxel_m;
   o.peer.ndt_resolution_m = c.ndt_resolution_m;
   o.peer.pixel_stride = c.peer_pixel_stride;
@@ -155,7 +158,7 @@ void add_bench_command(CLI::App& app) {
                   "instead of running: combine the results.json of these earlier --out folders into --out (a later "
                   "folder's row replaces an earlier one of the same method and input)")
       ->expected(1, -1);
-  cmd->add_option("--registration", opts->registration, "all, or a comma-separated list of registration methods")
+  cmd->add_option("--registration", opts->registration, "all, or a comma-separated list of registration methods: " + registration_list())
       ->capture_default_str();
   cmd->add_option("--peers", opts->peers, "peers: all, none, or a comma-separated list of gicp, ndt (PCL), o3d-icp, o3d-colored-icp, o3d-rgbd "
                   "(Open3D, where built)")
@@ -163,7 +166,7 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--loop-closure", opts->loop_closure,
                   "loop-closure modes each registration runs in: all, or a list of off, on, global (run --global)")
       ->capture_default_str();
-  cmd->add_option("--out", opts->out, "output folder")->capture_default_str();
+  add_out_option(cmd, opts->out, "output folder");
   cmd->add_option("--shard", opts->shard,
                   "K/N: run only slice K (from 0) of N of the runs --list-runs lists (a job array task; "
                   "`bench --merge` of the N --out folders in K order gives the single run's tables)");
@@ -180,8 +183,9 @@ void add_bench_command(CLI::App& app) {
       ->check(non_negative())
       ->capture_default_str();
   cmd->add_option("--synthetic-frames", opts->synthetic_frames, "frames rendered per synthetic preset")
-      ->check(in_range(2, 100000))
+      ->check(synthetic_frames_range(2))
       ->capture_default_str();
+  cmd->add_option("--seed", opts->seed, "noise seed of the synthetic: inputs")->check(seed_range())->capture_default_str();
   cmd->add_option("--peer-voxel-m", opts->peer_voxel_m, "voxel-grid size of the peers' clouds in metres")
       ->check(positive())
       ->capture_default_str();
@@ -213,6 +217,7 @@ void add_bench_command(CLI::App& app) {
     if (!opts->config_file.empty()) line += " --config " + quote_arg(opts->config_file);
     if (!opts->shard.empty()) line += " --shard " + quote_arg(opts->shard);
     if (opts->tracking_level >= 0) line += " --tracking-level " + std::to_string(opts->tracking_level);
+    if (opts->seed != 0) line += " --seed " + std::to_string(opts->seed);
     opts->command_line = line;
     run_bench_command(*opts);
   });

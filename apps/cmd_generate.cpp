@@ -56,6 +56,10 @@ template <class Sequence>
 void write_folder(const Sequence& sequence, int frames, const GenerateArgs& a) {
   datasets::TumWriteOptions write;
   write.overwrite = a.force;
+  // Said here with the flag that replaces it: `hashfusion generate` twice writes out/generate twice.
+  std::error_code ec;
+  if (!a.force && std::filesystem::exists(std::filesystem::symlink_status(a.out, ec)))
+    throw Error(a.out + ": already exists (choose another --out, or --force to replace an earlier generate's output)");
   InterruptGuard guard;
   Progress progress("generate", frames);
   write.progress = [&](int done, int) {
@@ -122,10 +126,12 @@ void add_generate_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "generate", "Write a synthetic RGB-D sequence with exact ground truth as a TUM RGB-D folder");
   cmd->add_option("--preset", args->preset, "Scene and trajectory: " + names)->capture_default_str();
-  cmd->add_option("--frames", args->frames, "Number of frames (30 Hz)")->capture_default_str();
-  cmd->add_option("--seed", args->seed, "Sensor-noise seed; the same seed gives identical files")
+  cmd->add_option("--frames", args->frames, "Number of frames (30 Hz)")->check(synthetic_frames_range())
       ->capture_default_str();
-  cmd->add_option("--out", args->out, "Output folder (must not exist unless --force)")->required();
+  cmd->add_option("--seed", args->seed, "Sensor-noise seed; the same seed gives identical files")
+      ->check(seed_range())
+      ->capture_default_str();
+  add_out_option(cmd, args->out, "Output folder (must not exist unless --force)");
   cmd->add_option("--camera", args->camera, "Camera preset name or camera file (resolution and intrinsics)")->capture_default_str();
   cmd->add_flag("--no-noise", args->no_noise, "Exact depth and colour: no sensor model");
   cmd->add_flag("--force", args->force, "Replace an existing output folder (only one a previous generate wrote)");

@@ -76,7 +76,7 @@ void add_head_features_command(CLI::App& app) {
       "Laplace-Beltrami, thresholding, mesh morphology");
   auto* input = cmd->add_option("--input", args->mesh_path, "head mesh, .ply or .obj (any pose and unit); required");
   add_deprecated_alias(cmd, input, "--mesh", args->mesh_path);
-  cmd->add_option("--out", args->out_dir, "output folder (created)")->required();
+  add_out_option(cmd, args->out_dir, "output folder (created)");
   cmd->add_option("--method", args->method, "evaluation for the features: discrete, mls or laplace")
       ->capture_default_str();
   cmd->add_option("--quantity", args->quantity, "curvature thresholded (discrete, mls): mean, gaussian, k_max, k_min")

@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <sys/stat.h>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -65,6 +66,10 @@ std::function<bool(const std::string&)> previous_lidar_run_wrote(const std::stri
   return [names](const std::string& name) { return names.count(name) > 0; };
 }
 
+// The largest t^S taken (--t-m-per-m, --sweep-t-m-per-m): radii of a kilometre per metre of height already cover any grid;
+// beyond, the radius in cells overflows (1e308 failed deep in the clustering operator).
+constexpr double kMaxTMPerM = 1000.0;
+
 std::vector<double> numbers(const std::string& text, const std::string& option) {
   std::vector<double> v;
   std::stringstream ss(text);
@@ -80,13 +85,22 @@ std::vector<double> numbers(const std::string& text, const std::string& option) 
   return v;
 }
 
+// --sweep-t-m-per-m's values, each in --t-m-per-m's range.
+std::vector<double> sweep_values(const std::string& text) {
+  std::vector<double> v = numbers(text, "--sweep-t-m-per-m");
+  for (double t : v)
+    if (!(t >= 0 && t <= kMaxTMPerM))
+      throw Error("--sweep-t-m-per-m: expected 0.." + number_for_message(kMaxTMPerM) + " m per m, got " + number_for_message(t));
+  return v;
+}
+
 lidar::BuiltUpOptions options_of(const LidarArgs& a) {
   lidar::BuiltUpOptions o;
   o.cell_m = a.cell_m, o.t_s = a.t_s;
   o.heights.ground_margin_m = a.ground_margin_m;
   if (!a.areas.empty()) {
-    const auto v = numbers(a.areas, "--areas");
-    if (v.size() != 3) throw Error("--areas: expected a1,a2,a3 (m^2)");
+    const auto v = numbers(a.areas, "--areas-m2");
+    if (v.size() != 3) throw Error("--areas-m2: expected a1,a2,a3 (m^2)");
     o.areas = {v[0], v[1], v[2]};
   }
   lidar::validate(o);
@@ -160,6 +174,7 @@ std::string run_merge(const LidarArgs& a, const lidar::BuiltUpOptions& o, lidar:
 void run_lidar(LidarArgs a) {
   lidar::check_epsg(a.epsg, "--epsg");  // before any output exists: a code GDAL does not know is a usage error
   lidar::BuiltUpOptions o = options_of(a);
+  if (!a.sweep.empty()) sweep_values(a.sweep);  // a bad value fails before the points are read
   lidar::Report report;
   report.options = o;
   report.outputs = {"classes.png", "classes.tif", "buildings.png", "report.json", "report.md"};
@@ -180,7 +195,11 @@ void run_lidar(LidarArgs a) {
   if (a.inputs.size() == 1 && a.inputs[0].rfind("synthetic:", 0) == 0) {
     lidar::SyntheticSettlementOptions so;
     so.cell_m = a.cell_m;
-    so.seed = static_cast<std::uint64_t>(numbers(a.inputs[0].substr(10), "--input synthetic:SEED").at(0));
+    const std::vector<double> seed = numbers(a.inputs[0].substr(10), "--input synthetic:SEED");
+    // A whole number a double holds exactly: -3 or 1e300 would wrap or overflow in the cast.
+    if (seed.size() != 1 || !(seed[0] >= 0 && seed[0] <= 9007199254740992.0) || seed[0] != std::floor(seed[0]))
+      throw Error("--input synthetic:SEED: expected a whole number 0..2^53, got '" + a.inputs[0].substr(10) + "'");
+    so.seed = static_cast<std::uint64_t>(seed[0]);
     scene = lidar::synthetic_settlements(so);
     if (a.areas.empty()) o.areas = scene->areas, report.options.areas = scene->areas;
     LasHeader h;
@@ -241,7 +260,7 @@ void run_lidar(LidarArgs a) {
   lidar::BuiltUp b = lidar::classify_built_up(raster, o);
   const std::optional<Image<std::uint8_t>> class_truth = scene ? std::optional(scene->classes) : std::nullopt;
   if (!a.sweep.empty()) {
-    for (double t : numbers(a.sweep, "--sweep-t")) {
+    for (double t : sweep_values(a.sweep)) {
       lidar::reclassify(b, t, o.areas, o.cell_m);
       lidar::SweepRow row{t, b.profile.stats, std::nullopt};
       if (class_truth) row.validation = lidar::compare_classes(b.profile.classes, *class_truth);
@@ -263,9 +282,10 @@ void add_lidar_command(CLI::App& app) {
   auto args = std::make_shared<LidarArgs>();
   CLI::App* cmd = app.add_subcommand("lidar", "classify built-up areas (hamlet / village / town / city) in LiDAR point clouds");
   cmd->add_option("--input", args->inputs, "LAS 1.0-1.4 files (LAZ must be decompressed first), or synthetic:SEED");
-  cmd->add_option("--out", args->out, "output folder")->required();
-  cmd->add_option("--cell-m", args->cell_m, "grid resolution r in metres")->capture_default_str();
+  add_out_option(cmd, args->out, "output folder");
+  cmd->add_option("--cell-m", args->cell_m, "grid resolution r in metres")->check(positive())->capture_default_str();
   auto* t = cmd->add_option("--t-m-per-m", args->t_s, "t^S: dilation radius (m) per metre of building height")
+                ->check(in_range(0, kMaxTMPerM, "m per m"))
                 ->capture_default_str();
   add_deprecated_alias(cmd, t, "--t", args->t_s);
   auto* areas = cmd->add_option("--areas-m2", args->areas,
@@ -275,7 +295,8 @@ void add_lidar_command(CLI::App& app) {
   cmd->add_option("--footprints", args->footprints, "building footprints (any GDAL vector format) to validate the building mask");
   cmd->add_option("--footprint-layer", args->footprint_layer, "layer of --footprints (default: the first)");
   cmd->add_option("--epsg", args->epsg, "CRS of the outputs when the LAS files do not state it");
-  cmd->add_option("--sweep-t", args->sweep, "sensitivity analysis over t^S, e.g. 0.5,1,1.5,2,3");
+  auto* sweep = cmd->add_option("--sweep-t-m-per-m", args->sweep, "sensitivity analysis over t^S, e.g. 0.5,1,1.5,2,3");
+  add_deprecated_alias(cmd, sweep, "--sweep-t", args->sweep);
   cmd->add_option("--tiles", args->tiles, "tiled run: NX,NY tiles over the inputs' grid (with --tile)");
   cmd->add_option("--tile", args->tile, "the tile (0..NX*NY-1) this process computes; writes OUT/tile_K.hflt");
   cmd->add_option("--merge", args->merge, "merge the tile_*.hflt files of this folder into the final outputs");

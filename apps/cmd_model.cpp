@@ -160,7 +160,7 @@ void add_model_command(CLI::App& app) {
   cmd->add_option("--events", a->events,
                   "sketch by a script of the window's events, one per line (click U V | undo | close | same_plane | "
                   "new | shot NAME), before the window with --interactive; writes OUT/sketch.json");
-  cmd->add_option("--out", a->out, "output folder (created)")->required();
+  add_out_option(cmd, a->out, "output folder (created)");
   cmd->add_option("--cloud", a->cloud, "a .ply point cloud (or mesh) replacing the network's cloud");
   cmd->add_option("--dataset", a->dataset, "a run's TUM folder when report.json's \"input\" has moved");
   cmd->add_flag("--all-frames", a->all_frames, "a run: every tracked frame is a shot, not only keyframes");

@@ -67,7 +67,7 @@ void add_record_command(CLI::App& app) {
   cmd->add_option("--input", opts->input,
                   "openni2://[URI], FILE.oni, v4l2:///dev/videoN[+/dev/videoM], libcamera://[ID]")
       ->required();
-  cmd->add_option("--out", opts->out, "the folder to create (must not exist)")->required();
+  add_out_option(cmd, opts->out, "the folder to create (must not exist)");
   auto* frames = cmd->add_option("--frames", opts->frames, "stop after N frames")->check(positive());
   cmd->add_option("--seconds", opts->seconds, "stop after S seconds")->check(positive())->excludes(frames);
   cmd->add_option("--camera", opts->camera, "camera preset or file (default: the device's, else ros)");

@@ -8,6 +8,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <iostream>
@@ -17,6 +19,7 @@
 #include "apps/cli_common.h"
 #include "apps/commands.h"
 #include "apps/interrupt.h"
+#include "apps/registration_list.h"
 #include "apps/invocation.h"
 #include "core/atomic_file.h"
 #include "core/bounded_read.h"
@@ -41,7 +44,7 @@ namespace {
 
 struct RunOptions {
   std::string input = "synthetic:room";
-  std::string out = "out/run";
+  std::string out;  // --out: out/run unless given (add_out_option)
   std::string registration = "combined";
   std::string backend = "cpu";
   std::string camera;
@@ -73,6 +76,22 @@ void write_cloud_file(const std::string& path, const PointCloud& cloud) {
   } else {
     throw Error(path + ": expected a point cloud file name ending in .ply or .pcd");
   }
+}
+
+// --save-map / --save-cloud FILE outside --out, checked before the first frame: the file is written atomically
+// with the other outputs at the end, where a missing folder or a wrong extension would cost the whole run.
+void check_extra_output(const std::string& option, const std::string& path) {
+  if (path.empty() || std::filesystem::path(path).parent_path().empty()) return;  // a bare name: into --out
+  if (option == "--save-cloud") {
+    const std::string ext = std::filesystem::path(path).extension().string();
+    if (ext != ".ply" && ext != ".pcd") throw Error(option + ": " + path + ": expected a file name ending in .ply or .pcd");
+  }
+  const std::string folder = std::filesystem::path(path).parent_path().string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw Error(option + ": " + path + " is a folder; give a file name");
+  if (!std::filesystem::is_directory(folder, ec)) throw Error(option + ": " + path + ": no folder " + folder);
+  if (access(folder.c_str(), W_OK | X_OK) != 0)
+    throw Error(option + ": " + path + ": cannot write into " + folder + " (" + std::strerror(errno) + ")");
 }
 
 #if HF_HAVE_VIEWER
@@ -185,6 +204,8 @@ std::function<bool(const std::string&)> previous_run_wrote(const std::string& ou
 void run(const RunOptions& o, const CLI::App& cmd) {
   const slam::PipelineConfig config = make_config(o, cmd);
   check_capacity_fits_memory(config);
+  check_extra_output("--save-map", o.save_map);
+  check_extra_output("--save-cloud", o.save_cloud);
   // Before the first frame, not after the last: the lock, and a private folder the outputs are built in and that
   // replaces --out in one step at the end (core/output_transaction.h).
   OutputTransaction outputs(o.out);
@@ -292,8 +313,8 @@ void add_run_command(CLI::App& app) {
                   "synthetic:PRESET, a TUM RGB-D folder, a 7-Scenes folder, or live: openni2://[URI], FILE.oni, "
                   "v4l2:///dev/videoN[+/dev/videoM], libcamera://[ID] (`hashfusion devices` lists them)")
       ->capture_default_str();
-  cmd->add_option("--out", opts->out, "output folder")->capture_default_str();
-  cmd->add_option("--registration", opts->registration, "registration method, or groundtruth (fusion only)")
+  add_out_option(cmd, opts->out, "output folder");
+  cmd->add_option("--registration", opts->registration, "registration method: " + registration_list() + ", or groundtruth (fusion only)")
       ->capture_default_str();
   cmd->add_option("--backend", opts->backend, "reduction backend: cpu | opencl")->capture_default_str();
   cmd->add_option("--voxel-m", opts->voxel_m, "voxel size in metres")->check(voxel_m_range())
@@ -324,9 +345,9 @@ void add_run_command(CLI::App& app) {
       ->check(in_range(1, double(size_t(1) << 26), "blocks"));
   cmd->add_option("--max-frames", opts->max_frames, "stop after N frames (0 = all)")->check(non_negative());
   cmd->add_option("--synthetic-frames", opts->synthetic_frames, "frames of a synthetic: input")
-      ->check(in_range(1, 100000))
+      ->check(synthetic_frames_range())
       ->capture_default_str();
-  cmd->add_option("--seed", opts->seed, "noise seed of a synthetic: input")->capture_default_str();
+  cmd->add_option("--seed", opts->seed, "noise seed of a synthetic: input")->check(seed_range())->capture_default_str();
   cmd->add_option("--save-map", opts->save_map,
                   "also write the map (the TSDF volume, fusion/volume_io.h; no keyframes) to FILE, by default "
                   "map.hfmap in --out; written with the other outputs, also after Ctrl-C / SIGTERM")

@@ -11,6 +11,7 @@
 #include "core/bounded_read.h"
 #include "core/error.h"
 #include "core/number_text.h"
+#include "registration/reduction.h"
 #include "slam/config_reference.h"
 #include "slam/appearance.h"
 
@@ -297,6 +298,9 @@ RegistrationOptions effective_registration_options(const PipelineConfig& c) {
 // --- Configuration ----------------------------------------------------------------------------------------------
 
 void PipelineConfig::validate() const {
+  // Before any input is opened (make_backend would refuse it only when the pipeline is built).
+  if (const auto names = backend_names(); std::find(names.begin(), names.end(), backend) == names.end())
+    throw Error("unknown reduction backend '" + backend + "' (known: cpu, opencl)");
   if (registration != "groundtruth") {
     const auto names = registration_names();
     if (std::find(names.begin(), names.end(), registration) == names.end()) {

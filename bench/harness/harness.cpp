@@ -178,6 +178,7 @@ std::string render_synthetic(const BenchInput& input, const std::string& cache_r
   datasets::SyntheticOptions s;
   s.preset = input.spec.substr(std::string(datasets::kSyntheticPrefix).size());
   s.frames = o.max_frames > 0 ? int(std::min<long>(o.max_frames, o.synthetic_frames)) : o.synthetic_frames;
+  s.seed = o.seed;
   const datasets::SyntheticSequence sequence(s);
   const std::string dir = cache_root + "/" + file_safe(s.preset);
   datasets::TumWriteOptions w;
@@ -196,10 +197,10 @@ std::string settings_line(const BenchOptions& o) {
   char buffer[512];
   std::snprintf(buffer, sizeof buffer,
                 "voxel %.4g m, backend %s, max frames %s, synthetic presets rendered with %d frames (640x480 'ros' "
-                "camera, sensor noise on), peers voxel grid %.3g m, NDT cells %.3g m, pixel stride %d",
+                "camera, sensor noise on, seed %llu), peers voxel grid %.3g m, NDT cells %.3g m, pixel stride %d",
                 o.voxel_m, o.backend.c_str(), o.max_frames > 0 ? std::to_string(o.max_frames).c_str() : "all",
                 o.max_frames > 0 ? int(std::min<long>(o.max_frames, o.synthetic_frames)) : o.synthetic_frames,
-                double(o.peer.voxel_m), double(o.peer.ndt_resolution_m), o.peer.pixel_stride);
+                static_cast<unsigned long long>(o.seed), double(o.peer.voxel_m), double(o.peer.ndt_resolution_m), o.peer.pixel_stride);
   return buffer;
 }
 

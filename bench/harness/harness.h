@@ -43,6 +43,7 @@ struct BenchOptions {
   int tracking_level = -1;                 // >= 0 overrides the config's tracking_level
   long max_frames = 0;                     // per run, 0 = all
   int synthetic_frames = 300;              // frames rendered per synthetic preset (at most max_frames when set)
+  std::uint64_t seed = 0;                  // sensor-noise seed of the synthetic presets (run / generate --seed)
   PeerOptions peer;
   std::string command_line;                // for the report
   std::string source_dir;                  // where `git rev-parse HEAD` runs; empty: commit "unknown"

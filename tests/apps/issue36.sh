@@ -26,6 +26,15 @@ readme)  # the README opens with its title and summary, then exactly the two com
   # status table: one short line per part, each under 160 characters
   awk '/^## Status/{s=1; next} s && /^## /{exit} s && /^\|/ && length($0) > 160 {print; bad=1} END{exit bad}' \
     "$SRC/README.md" || fail "a status row longer than 160 characters"
+  # the synopsis and run --help name every registration method the registry knows
+  known=$("$HF" config --registration no-such 2>&1 | sed -n 's/.*(known: \(.*\))$/\1/p' | tr -d ,)
+  [ -n "$known" ] || fail "no list of registration methods"
+  synopsis=$(grep -m1 -- '--registration combined|' "$SRC/README.md")
+  "$HF" run --help > help.txt
+  for m in $known; do
+    printf '%s\n' "$synopsis" | grep -q -- "[[| ]$m[]|]" || fail "the README's synopsis lacks $m: $synopsis"
+    grep -A3 -- "--registration" help.txt | grep -q -- "[ :]$m[,]\?" || fail "run --help lacks $m"
+  done
   grep -q "Redistribution and use in source and binary forms" "$SRC/LICENSE" || fail "LICENSE is not BSD 3-Clause"
   grep -q "the hashfusion authors" "$SRC/LICENSE" || fail "LICENSE names no copyright holder"
   # every package of the list (build tools aside) is named in THIRD_PARTY.md with its licence
@@ -54,13 +63,48 @@ cli_errors)  # every argument error: exit 1 and one short line (not CLI11's 104-
   grep -q "expected a finite number > 0, got -1e+308" log || fail "peer voxel: $(cat log)"
   check_error bench --voxel-m 20 --input synthetic:room --out o  # the same range as run's
   grep -q -- "--voxel-m: expected 0.0001..10 m, got 20" log || fail "bench voxel range: $(cat log)"
+  check_error run --backend cuda --out o  # refused with the configuration, before the input is opened
+  grep -q "unknown reduction backend 'cuda' (known: cpu, opencl)" log || fail "backend: $(cat log)"
   check_error record --frames 0 --out o
   check_error eval --est x.txt
   check_error eval --gt a --est b --delta-s 0
   check_error model --acceptance 2 --out o
   check_error head-features --out o
   grep -q "head-features: --input MESH is required" log || fail "$(cat log)"
+  # a seed is unsigned (CLI11 alone wraps -1 to 2^64 - 1); synthetic frame counts share one range
+  for sub in run generate bench; do
+    check_error $sub --seed=-1 --input synthetic:room --out o
+    grep -q -- "--seed: expected 0..1.84467e+19, got -1" log || fail "$sub seed: $(cat log)"
+  done
+  check_error generate --frames 200000 --out o
+  grep -q -- "--frames: expected 1..100000 frames, got 200000" log || fail "generate frames: $(cat log)"
+  check_error run --synthetic-frames 200000 --out o
+  grep -q -- "--synthetic-frames: expected 1..100000 frames, got 200000" log || fail "run frames: $(cat log)"
+  # lidar: ranges checked before any point is read (1e308 failed deep in the clustering operator)
+  check_error lidar --input synthetic:1 --cell-m=-1e308 --out o
+  check_error lidar --input synthetic:1 --t-m-per-m 1e308 --out o
+  grep -q -- "--t-m-per-m: expected 0..1000 m per m, got 1e+308" log || fail "lidar t: $(cat log)"
+  check_error lidar --input synthetic:1 --sweep-t-m-per-m 1,1e308 --out o
+  grep -q -- "--sweep-t-m-per-m: expected 0..1000 m per m, got 1e+308" log || fail "lidar sweep: $(cat log)"
+  check_error lidar --input synthetic:-3 --out o
+  grep -q -- "synthetic:SEED: expected a whole number" log || fail "lidar seed: $(cat log)"
   [ ! -e o ] || fail "an argument error created o"
+  # every subcommand that writes files takes --out, by default out/SUBCOMMAND; CLI11 prints it as
+  # "  --out TEXT=out/run  output folder" (the description on the next line when the default is long)
+  for sub in eval lidar generate head-features model; do  # a hidden deprecated alias leaves no "Excludes: " behind
+    "$HF" $sub --help > help.txt 2>&1 || fail "$sub --help: exit $?"
+    ! grep -Eq "Excludes: ?([^-]|$)" help.txt || fail "$sub --help: $(grep -E "Excludes: ?([^-]|$)" help.txt)"
+  done
+  for sub in run generate bench lidar head-features model record; do
+    "$HF" $sub --help > help.txt 2>&1 || fail "$sub --help: exit $?"
+    grep -Eq -- "^ +--out TEXT=out/$sub( |$)" help.txt || fail "$sub --help: $(grep -- --out help.txt)"
+  done
+  # and writes there when --out is not given (generate: the quickest of them)
+  timeout 120 "$HF" generate --frames 1 --camera cam.txt > log 2>&1 || fail "generate without --out: $(cat log)"
+  [ -s out/generate/groundtruth.txt ] || fail "generate without --out wrote no out/generate: $(cat log)"
+  check_error generate --frames 1 --camera cam.txt  # a second time: names --force
+  grep -q "out/generate: already exists (choose another --out, or --force to replace" log || fail "$(cat log)"
+  timeout 120 "$HF" generate --frames 1 --camera cam.txt --force > log 2>&1 || fail "generate --force: $(cat log)"
   ;;
 version)  # hashfusion --version: the version and the commit built from
   "$HF" --version > log 2>&1 || fail "exit $?: $(cat log)"
@@ -69,7 +113,7 @@ version)  # hashfusion --version: the version and the commit built from
 report)  # report.json: provenance, a structured camera, floats shortest; --config takes a whole report.json
   timeout 300 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 3 --out a > log 2>&1 ||
     fail "run: $(tail -3 log)"
-  python3 - a/report.json "$("$HF" --version)" <<'PY' || fail "report.json"
+  python3 - a/report.json "$("$HF" --version)" "$SRC/docs/report.md" <<'PY' || fail "report.json"
 import json, re, sys
 j = json.load(open(sys.argv[1]))
 version = sys.argv[2].split()[1]
@@ -85,6 +129,11 @@ ro = j["config"]["registration_options"]
 assert ro["max_dist_m"] == 0.1 and ro["rgb_weight"] == 0.4, ro
 text = json.dumps(j["config"])  # each number as Python reads it back, shortest form
 assert "0000000" not in text and "9999999" not in text, text
+# docs/report.md names every field (and every field of the per-frame rows and the colour check)
+doc = open(sys.argv[3]).read()
+fields = list(j) + list(j["per_frame"][0]) + list(j["colour_check"])
+missing = [k for k in fields if "`%s`" % k not in doc]
+assert not missing, "docs/report.md does not list %s" % missing
 PY
   # the whole report.json as --config repeats the run's configuration
   timeout 300 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 3 --config a/report.json \
@@ -105,6 +154,16 @@ aliases)  # the old spellings still run, with a one-line deprecation notice nami
   cmp new.json now.json || fail "the aliases gave another result"
   timeout 60 "$HF" eval --gt t.txt --est t.txt --max-difference 0.02 --max-difference-s 0.02 > /dev/null 2> log
   [ $? = 1 ] || fail "an option and its alias together were accepted"
+  # lidar's: the same outputs (the input's path aside, which names the folder)
+  timeout 120 "$HF" lidar --input synthetic:1 --t 2 --areas 50000,1000000,5000000 --sweep-t 1,2 --out lo > /dev/null \
+    2> log || fail "lidar with the old spellings: $(cat log)"
+  for o in t areas sweep-t; do
+    grep -q "^hashfusion: --$o is deprecated; use --$o-m" log || fail "no notice for --$o: $(cat log)"
+  done
+  timeout 120 "$HF" lidar --input synthetic:1 --t-m-per-m 2 --areas-m2 50000,1000000,5000000 --sweep-t-m-per-m 1,2 \
+    --out ln > /dev/null 2> log || fail "lidar: $(cat log)"
+  for f in classes.tif buildings.png classes.png synthetic.las; do cmp lo/$f ln/$f || fail "lidar aliases: $f differs"; done
+  sed 's#lo/synthetic.las#ln/synthetic.las#' lo/report.json | cmp - ln/report.json || fail "lidar aliases: report.json"
   ;;
 maps)  # run --save-map / --save-cloud / --load-map: written with the outputs (also on SIGTERM), read back
   timeout 300 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 4 --voxel-m 0.02 --save-map \
@@ -119,6 +178,22 @@ maps)  # run --save-map / --save-cloud / --load-map: written with the outputs (a
   head -c 300 c.pcd | grep -q "^FIELDS x y z" || fail "c.pcd: $(head -c 200 c.pcd)"
   head -c 300 c.pcd | grep -q "normal_x" && head -c 300 c.pcd | grep -q "rgb" || fail "c.pcd fields: $(head -5 c.pcd)"
   cmp m.hfmap a/map.hfmap || fail "the same run saved another map"
+  # Open3D, where installed, reads both with colour and unit normals, the same points
+  if /usr/bin/python3 -c "import open3d" 2> /dev/null; then
+    /usr/bin/python3 - a/cloud.ply c.pcd <<'PY' || fail "Open3D read the clouds differently"
+import sys
+import numpy as np
+import open3d as o3d
+ply, pcd = (o3d.io.read_point_cloud(p) for p in sys.argv[1:])
+for c in (ply, pcd):
+    assert len(c.points) > 1000 and c.has_colors() and c.has_normals(), c
+    assert np.allclose(np.linalg.norm(np.asarray(c.normals), axis=1), 1, atol=1e-5)
+assert np.array_equal(np.asarray(ply.points), np.asarray(pcd.points))
+assert np.abs(np.asarray(ply.colors) - np.asarray(pcd.colors)).max() <= 1 / 255 + 1e-9
+PY
+  else
+    echo "skipped: the Open3D round trip (python3-open3d not installed)"
+  fi
   [ ! -e b/m.hfmap ] || fail "a path was put into --out"
   # continuing in the map: the synthetic frames start at their ground truth, so the run tracks from the first frame
   timeout 300 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 4 --voxel-m 0.02 \
@@ -131,6 +206,16 @@ maps)  # run --save-map / --save-cloud / --load-map: written with the outputs (a
   [ $? = 1 ] || fail "a map of 2 cm voxels loaded into a 1 cm configuration"
   grep -q "a/map.hfmap: load_map: the map has voxels of 0.02 m" log || fail "$(cat log)"
   [ "$(grep -c "^hashfusion:" log)" = 1 ] || fail "expected one error line: $(cat log)"  # besides input: / camera:
+  # a FILE outside --out that cannot be written fails before the first frame (it is written last), in one line
+  timeout 60 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 20 --save-map "$ROOT/none/m.hfmap" \
+    --out f > log 2>&1
+  [ $? = 1 ] && [ "$(wc -l < log)" = 1 ] || fail "a map into a missing folder: $(cat log)"
+  grep -qx "hashfusion: --save-map: $ROOT/none/m.hfmap: no folder $ROOT/none" log || fail "$(cat log)"
+  timeout 60 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 20 --save-cloud "$ROOT/c.xyz" \
+    --out f > log 2>&1
+  [ $? = 1 ] && [ "$(wc -l < log)" = 1 ] || fail "a cloud of another type: $(cat log)"
+  grep -q -- "--save-cloud: $ROOT/c.xyz: expected a file name ending in .ply or .pcd" log || fail "$(cat log)"
+  [ ! -e f ] || fail "a refused --save-map / --save-cloud left f"
   printf 'not a map' > bad.hfmap
   timeout 60 "$HF" run --input synthetic:room --camera cam.txt --load-map bad.hfmap --out d > log 2>&1
   [ $? = 1 ] && grep -q "bad.hfmap" log || fail "a bad map: $(cat log)"

@@ -146,6 +146,8 @@ std::string error_of(const std::function<void()>& f) {
     f();
   } catch (const Error& e) {
     return e.what();
+  } catch (const CLI::ParseError& e) {  // a range check of the option (apps/cli_common.h)
+    return e.what();
   }
   return "";
 }
@@ -158,7 +160,9 @@ TEST_F(Generate, BadArgumentsGiveAClearError) {
   m = error_of([&] { run({"--frames", "0", "--out", out}); });
   EXPECT_NE(m.find("frames"), std::string::npos) << m;
   m = error_of([&] { run({"--frames", "-4", "--out", out}); });
-  EXPECT_NE(m.find("frames"), std::string::npos) << m;
+  EXPECT_NE(m.find("--frames: expected 1..100000 frames, got -4"), std::string::npos) << m;
+  m = error_of([&] { run({"--frames", "1", "--seed", "-1", "--out", out}); });  // not 2^64 - 1
+  EXPECT_NE(m.find("--seed: expected 0..1.84467e+19, got -1"), std::string::npos) << m;
   EXPECT_FALSE(fs::exists(out));
 
   // An output below a regular file cannot be created (works as root too, unlike permission bits).
@@ -180,8 +184,12 @@ TEST_F(Generate, BadArgumentsGiveAClearError) {
   m = error_of([&] { run({"--frames", "1", "--out", out, "--camera", "fr9"}); });
   EXPECT_NE(m.find("'fr9'"), std::string::npos) << m;
 
-  // A missing --out is CLI11's required-option error.
-  EXPECT_THROW(run({"--frames", "1"}), CLI::RequiredError);
+  // Without --out: out/generate of the working folder, as every subcommand's outputs go to out/SUBCOMMAND.
+  const fs::path cwd = fs::current_path();
+  fs::current_path(root_);
+  run({"--frames", "1", "--camera", camera_file_});
+  fs::current_path(cwd);
+  EXPECT_EQ(PinholeCamera::load((root_ / "out" / "generate" / "camera.json").string()), small_camera_);
 }
 
 // Issue 14.2: "generate --out . --force" deleted the folder's contents and then failed; an unrelated
