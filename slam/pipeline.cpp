@@ -126,11 +126,6 @@ Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
     fo.driver.iterations = iterations;
     fallback_ = make_registration(config_.fallback_registration, fo, make_backend(config_.backend));
   }
-  if (config_.retry_rotation_first && options.driver.so3_iterations.empty()) {
-    RegistrationOptions ro = options;
-    ro.driver.so3_iterations = {10, 5};  // chosen on fr1/rpy 0-149's pairs (bench/results/accuracy/large_motion.md)
-    retry_ = make_registration(config_.registration, ro, make_backend(config_.backend));
-  }
   if (!config_.seed_registration.empty()) {
     RegistrationOptions so = default_registration_options(config_.seed_registration);
     seed_ = make_registration(config_.seed_registration, so, make_backend(config_.backend));
@@ -264,7 +259,6 @@ void Pipeline::check_colour(const FramePyramid& current, FrameResult* r) {
   o.driver.iterations = registration_->options().driver.iterations;
   registration_ = make_registration(config_.colour_check.depth_only_registration, o, make_backend(config_.backend));
   if (fallback_ && fallback_->name() == registration_->name()) fallback_.reset();
-  retry_.reset();  // it retried the colour method; the depth-only one reads no intensity to fit a rotation by
 }
 
 FramePyramid Pipeline::preprocess(const RgbdFrame& frame, FrameResult* r) const {
@@ -319,14 +313,6 @@ Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_
   const RegistrationResult primary_result = align_to_model(*registration_, current, guess);
   r->term_disagreement = term_disagreement(primary_result);
   Verdict primary = decide(primary_result, current, timestamp_s, registration_->name());
-  if (primary.action != Verdict::integrate && retry_) {  // the wide basin, only where the narrow one failed
-    Verdict retry = decide(align_to_model(*retry_, current, guess), current, timestamp_s, registration_->name());
-    if (retry.action == Verdict::integrate) {
-      retry.why = registration_->name() + " rejected (" + primary.why + "); retried rotation-first: accepted";
-      r->ms.track = ms_since(t0);
-      return retry;
-    }
-  }
   if (primary.action == Verdict::integrate || !fallback_) {
     r->ms.track = ms_since(t0);
     return primary;

@@ -271,7 +271,6 @@ class Pipeline {
   std::unique_ptr<Registration> registration_;  // null for groundtruth
   std::unique_ptr<Registration> fallback_;      // null when none
   std::unique_ptr<Registration> seed_;          // seed_registration; null when none
-  std::unique_ptr<Registration> retry_;         // retry_rotation_first: registration_ with so3; null when off
   ColourCheck colour_check_;
   std::unique_ptr<Reference> reference_;        // model maps + intensity at the last pose
   KeyframeMap keyframes_;

@@ -215,7 +215,6 @@ void visit_scalars(V&& v, PipelineConfig& c) {
   v("seed_registration", c.seed_registration);
   v("seed_min_motion_m", c.seed_min_motion_m);
   v("seed_min_motion_deg", c.seed_min_motion_deg);
-  v("retry_rotation_first", c.retry_rotation_first);
   v("backend", c.backend);
   v("tracking_level", c.tracking_level);
   v("constant_velocity", c.constant_velocity);

@@ -45,12 +45,6 @@ struct PipelineConfig {
   std::string seed_registration;
   double seed_min_motion_m = 0.03;    // well above a converged dense estimate's disagreement with sparse (~5 mm)
   double seed_min_motion_deg = 3.0;
-  // Where `registration` is rejected (the verdict is not to integrate), retry it from the same guess with
-  // rotation-first alignment (registration_options.so3_iterations [10, 5]: ElasticFusion's SO(3) step on the two
-  // coarsest levels, registration/so3_prealign.h) before the fallback: the wide basin that takes pairs 3-5 frames
-  // apart (after dropped frames) at no cost on the frames that track (bench/results/accuracy/large_motion.md).
-  // No effect when registration_options.so3_iterations is set already or the method reads no intensity.
-  bool retry_rotation_first = false;
   std::string backend = "cpu";             // reduction backend: cpu | opencl
   fusion::VolumeParams volume;             // voxel_m 0.01, truncation 4 voxels, capacity, weight cap
   fusion::IntegrateParams integrate;
