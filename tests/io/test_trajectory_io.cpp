@@ -162,7 +162,8 @@ TEST(TrajectoryIo, TypedPoseInTumOrder) {
       {"0 0 0 0 0 0 0", "expected a non-zero quaternion"},
   };
   for (const auto& [text, expect] : cases) {
-    const std::string msg = error_of([&] { hf::parse_tum_pose(text, "view: --camera-pose"); });
+    const std::string pose = text;  // clang 14 cannot capture a structured binding
+    const std::string msg = error_of([&] { hf::parse_tum_pose(pose, "view: --camera-pose"); });
     EXPECT_TRUE(contains(msg, "view: --camera-pose: ")) << text << " -> " << msg;
     EXPECT_TRUE(contains(msg, expect)) << text << " -> " << msg;
     EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
