@@ -365,6 +365,15 @@ void add_run_command(CLI::App& app) {
     // A flag given without a value takes its default name in --out (CLI11 leaves the value empty then).
     if (cmd->count("--save-map") && opts->save_map.empty()) opts->save_map = "map.hfmap";
     if (cmd->count("--save-cloud") && opts->save_cloud.empty()) opts->save_cloud = "cloud.ply";
+    // A path into --out itself (`--out o --save-map o/map.hfmap`) is the bare name: --out is replaced as a whole at
+    // the end (core/output_transaction.h), so a file written there beside the transaction would be lost.
+    const auto out_folder = std::filesystem::absolute(opts->out).lexically_normal();
+    for (std::string* path : {&opts->save_map, &opts->save_cloud}) {
+      const std::filesystem::path p(*path);
+      if (!p.parent_path().empty() &&
+          std::filesystem::absolute(p).lexically_normal().parent_path() == out_folder)
+        *path = p.filename().string();
+    }
     if (!opts->save_map.empty() && std::filesystem::path(opts->save_map).parent_path().empty() &&
         opts->save_map != "map.hfmap")
       throw Error("--save-map: a bare file name must be map.hfmap (in --out); give a path for another place");

@@ -178,6 +178,10 @@ maps)  # run --save-map / --save-cloud / --load-map: written with the outputs (a
   head -c 300 c.pcd | grep -q "^FIELDS x y z" || fail "c.pcd: $(head -c 200 c.pcd)"
   head -c 300 c.pcd | grep -q "normal_x" && head -c 300 c.pcd | grep -q "rgb" || fail "c.pcd fields: $(head -5 c.pcd)"
   cmp m.hfmap a/map.hfmap || fail "the same run saved another map"
+  # a path into --out itself is the bare name: written inside the transaction, listed with the outputs
+  timeout 300 "$HF" run --input synthetic:room --camera cam.txt --synthetic-frames 4 --voxel-m 0.02 \
+    --save-map g/./map.hfmap --out g > log 2>&1 || fail "run --save-map g/./map.hfmap: $(tail -3 log)"
+  cmp g/map.hfmap a/map.hfmap && grep -q '"map.hfmap"' g/report.json || fail "--save-map OUT/map.hfmap"
   # Open3D, where installed, reads both with colour and unit normals, the same points
   if /usr/bin/python3 -c "import open3d" 2> /dev/null; then
     /usr/bin/python3 - a/cloud.ply c.pcd <<'PY' || fail "Open3D read the clouds differently"
