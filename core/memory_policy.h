@@ -8,8 +8,8 @@
 // KiB to 64 MiB, is trimmed), so the next frame touches fresh zero pages and takes a page fault per 4 KiB: measured
 // on fr1/rpy, ~1050 minor faults a frame, ~340 fewer with this policy (212 k -> 143 k over 201 frames), 54.2 ->
 // 50.3 ms a frame, and 126.6 -> 96.1 ms a frame on the 810-frame ping-pong session whose re-fusion allocates per
-// re-fused frame (bench/results/backend.md, "Session 4"). The price is resident memory: freed buffers stay resident
-// up to the trim threshold per arena (fr1/rpy peak RSS 659 -> 700 MB).
+// re-fused frame (bench/results/backend.md, "Sessions 4 and 5"). The price is resident memory: freed buffers
+// stay resident up to the trim threshold per arena (fr1/rpy peak RSS 659 -> 700 MB).
 //
 // The policy: allocations up to 32 MiB come from the heap (the mmap threshold, fixed instead of glibc's sliding
 // one) and a heap keeps up to 256 MiB of free memory at its top before trimming. Only for executables: a library
