@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <functional>
 #include <iostream>
+#include <vector>
 #include <set>
 
 #include "apps/build_info.h"
@@ -78,20 +79,34 @@ void write_cloud_file(const std::string& path, const PointCloud& cloud) {
   }
 }
 
-// --save-map / --save-cloud FILE outside --out, checked before the first frame: the file is written atomically
-// with the other outputs at the end, where a missing folder or a wrong extension would cost the whole run.
-void check_extra_output(const std::string& option, const std::string& path) {
-  if (path.empty() || std::filesystem::path(path).parent_path().empty()) return;  // a bare name: into --out
-  if (option == "--save-cloud") {
-    const std::string ext = std::filesystem::path(path).extension().string();
-    if (ext != ".ply" && ext != ".pcd") throw Error(option + ": " + path + ": expected a file name ending in .ply or .pcd");
+// --save-map / --save-cloud FILE: where it goes, checked before the first frame (the file is written atomically with
+// the other outputs at the end, where a missing folder or a wrong extension would cost the whole run). Returns a
+// bare name (one of `bare_names`: into --out) or an absolute path (the user's, relative to where the command runs).
+// A path into --out itself (`--out o --save-map o/map.hfmap`) is the bare name: --out is replaced as a whole at the
+// end (core/output_transaction.h), so a file written there beside the transaction would be lost.
+std::string resolve_extra_output(const std::string& option, const std::string& path, const std::string& out,
+                                 const std::vector<std::string>& bare_names) {
+  if (path.empty()) return path;
+  std::filesystem::path p(path);
+  if (!p.parent_path().empty() &&
+      std::filesystem::absolute(p).lexically_normal().parent_path() == std::filesystem::absolute(out).lexically_normal())
+    p = p.filename();
+  if (p.parent_path().empty()) {
+    if (std::find(bare_names.begin(), bare_names.end(), p.string()) == bare_names.end())
+      throw Error(option + ": a bare file name must be " + bare_names.front() +
+                  (bare_names.size() > 1 ? " or " + bare_names.back() : "") +
+                  " (in --out); give a path for another place");
+    return p.string();
   }
-  const std::string folder = std::filesystem::path(path).parent_path().string();
+  if (option == "--save-cloud" && p.extension() != ".ply" && p.extension() != ".pcd")
+    throw Error(option + ": " + path + ": expected a file name ending in .ply or .pcd");
+  const std::string folder = p.parent_path().string();
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw Error(option + ": " + path + " is a folder; give a file name");
+  if (std::filesystem::is_directory(p, ec)) throw Error(option + ": " + path + " is a folder; give a file name");
   if (!std::filesystem::is_directory(folder, ec)) throw Error(option + ": " + path + ": no folder " + folder);
   if (access(folder.c_str(), W_OK | X_OK) != 0)
     throw Error(option + ": " + path + ": cannot write into " + folder + " (" + std::strerror(errno) + ")");
+  return std::filesystem::absolute(p).string();
 }
 
 #if HF_HAVE_VIEWER
@@ -204,8 +219,6 @@ std::function<bool(const std::string&)> previous_run_wrote(const std::string& ou
 void run(const RunOptions& o, const CLI::App& cmd) {
   const slam::PipelineConfig config = make_config(o, cmd);
   check_capacity_fits_memory(config);
-  check_extra_output("--save-map", o.save_map);
-  check_extra_output("--save-cloud", o.save_cloud);
   // Before the first frame, not after the last: the lock, and a private folder the outputs are built in and that
   // replaces --out in one step at the end (core/output_transaction.h).
   OutputTransaction outputs(o.out);
@@ -365,25 +378,8 @@ void add_run_command(CLI::App& app) {
     // A flag given without a value takes its default name in --out (CLI11 leaves the value empty then).
     if (cmd->count("--save-map") && opts->save_map.empty()) opts->save_map = "map.hfmap";
     if (cmd->count("--save-cloud") && opts->save_cloud.empty()) opts->save_cloud = "cloud.ply";
-    // A path into --out itself (`--out o --save-map o/map.hfmap`) is the bare name: --out is replaced as a whole at
-    // the end (core/output_transaction.h), so a file written there beside the transaction would be lost.
-    const auto out_folder = std::filesystem::absolute(opts->out).lexically_normal();
-    for (std::string* path : {&opts->save_map, &opts->save_cloud}) {
-      const std::filesystem::path p(*path);
-      if (!p.parent_path().empty() &&
-          std::filesystem::absolute(p).lexically_normal().parent_path() == out_folder)
-        *path = p.filename().string();
-    }
-    if (!opts->save_map.empty() && std::filesystem::path(opts->save_map).parent_path().empty() &&
-        opts->save_map != "map.hfmap")
-      throw Error("--save-map: a bare file name must be map.hfmap (in --out); give a path for another place");
-    if (!opts->save_cloud.empty() && std::filesystem::path(opts->save_cloud).parent_path().empty() &&
-        opts->save_cloud != "cloud.ply" && opts->save_cloud != "cloud.pcd")
-      throw Error("--save-cloud: a bare file name must be cloud.ply or cloud.pcd (in --out); give a path for another");
-    // Other paths are the user's, relative to where the command runs (write_run_outputs puts relative names in --out).
-    for (std::string* path : {&opts->save_map, &opts->save_cloud})
-      if (!path->empty() && !std::filesystem::path(*path).parent_path().empty())
-        *path = std::filesystem::absolute(*path).string();
+    opts->save_map = resolve_extra_output("--save-map", opts->save_map, opts->out, {"map.hfmap"});
+    opts->save_cloud = resolve_extra_output("--save-cloud", opts->save_cloud, opts->out, {"cloud.ply", "cloud.pcd"});
     run(*opts, *cmd);
   });
 }

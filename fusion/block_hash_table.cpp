@@ -7,9 +7,8 @@
 
 namespace hf::fusion {
 
-BlockHashTable::Array::Array(size_t n) : entries_owner(static_cast<Entry*>(std::calloc(n, sizeof(Entry)))) {
-  if (entries_owner == nullptr) throw std::bad_alloc();
-  entries = entries_owner.get();
+BlockHashTable::Array::Array(size_t n) : entries(static_cast<Entry*>(std::calloc(n, sizeof(Entry)))) {
+  if (entries == nullptr) throw std::bad_alloc();
   mask = n - 1;
   shift = 64 - std::countr_zero(n);
 }
@@ -125,7 +124,7 @@ std::uint32_t BlockHashTable::erase(int x, int y, int z) {
 
 void BlockHashTable::clear() {
   if (live_->mask + 1 == entries_for(initial_keys_)) {
-    std::memset(static_cast<void*>(live_->entries), 0, (live_->mask + 1) * sizeof(Entry));
+    std::memset(static_cast<void*>(live_->entries.get()), 0, (live_->mask + 1) * sizeof(Entry));
   } else {
     live_ = std::make_unique<Array>(entries_for(initial_keys_));
     current_.store(live_.get(), std::memory_order_release);

@@ -96,8 +96,7 @@ class BlockHashTable {
   // One power-of-two array of entries with its mask and hash shift: what find() reads through one pointer.
   struct Array {
     explicit Array(size_t entries);  // zeroed (calloc); throws std::bad_alloc
-    std::unique_ptr<Entry[], Free> entries_owner;
-    Entry* entries = nullptr;
+    std::unique_ptr<Entry[], Free> entries;
     size_t mask = 0;
     int shift = 63;  // 64 - log2(entries)
     size_t home(int x, int y, int z) const {
