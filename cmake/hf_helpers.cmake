@@ -42,6 +42,10 @@ endfunction()
 # target_* calls on NAME.
 function(hf_test name)
   cmake_parse_arguments(A "" "COST" "SOURCES;DEPS;LABELS;ENVIRONMENT;SYSTEM_INCLUDES" ${ARGN})
+  # The sanitizer suite leaves release_only tests out (CMakePresets.json): its build does not compile them either.
+  if(HF_SANITIZE AND "release_only" IN_LIST A_LABELS)
+    return()
+  endif()
   if(HF_UNITY AND NOT A_ENVIRONMENT)
     file(RELATIVE_PATH folder ${PROJECT_SOURCE_DIR}/tests ${CMAKE_CURRENT_SOURCE_DIR})
     string(REPLACE "/" "_" group "hf_tests_${folder}")
@@ -125,14 +129,14 @@ endif()
   set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES ${include_file})
 endfunction()
 
-# hf_fuzzer(NAME SOURCES... DEPS ... [SECONDS n]): a libFuzzer target (clang, HF_FUZZ=ON) plus a CTest test that
+# hf_fuzzer(NAME SOURCES... DEPS ... [SECONDS n, default HF_FUZZ_SECONDS]): a libFuzzer target (clang, HF_FUZZ=ON) plus a CTest test that
 # runs it for a short bounded time on an empty corpus seeded from tests/fuzz/corpus/NAME when that folder exists.
 # Without HF_FUZZ the same source is built into a plain driver that replays the seed corpus, so every build at
 # least exercises the seeds through the parser.
 function(hf_fuzzer name)
   cmake_parse_arguments(A "" "SECONDS" "SOURCES;DEPS" ${ARGN})
   if(NOT A_SECONDS)
-    set(A_SECONDS 10)
+    set(A_SECONDS ${HF_FUZZ_SECONDS})
   endif()
   set(corpus_src ${PROJECT_SOURCE_DIR}/tests/fuzz/corpus/${name})
   if(HF_FUZZ)
