@@ -41,7 +41,8 @@ struct PipelineConfig {
   // Seeding for large motions: this registry method (normally "sparse", whose answer does not depend on the guess)
   // runs first on every frame against the same reference; where its usable estimate differs from the motion prior
   // by more than seed_min_motion_m or seed_min_motion_deg, `registration` (and the fallback) start from it instead.
-  // Empty = off, the default: it costs the seed's time on every frame (bench/results/sparse.md measures both).
+  // Empty = off, the default: it costs the seed's time on every frame (bench/results/sparse.md measures both);
+  // seed_on_failure below runs the same method on rejected frames only.
   std::string seed_registration;
   double seed_min_motion_m = 0.03;    // well above a converged dense estimate's disagreement with sparse (~5 mm)
   double seed_min_motion_deg = 3.0;
