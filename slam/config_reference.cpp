@@ -35,6 +35,8 @@ std::vector<ConfigKey> make_reference() {
       row("seed_registration", "", any(), "runs first on every frame to seed large motions (empty: off)"),
       row("seed_min_motion_m", "m", at_least(0), "the seed replaces the motion prior when they differ by more"),
       row("seed_min_motion_deg", "deg", at_least(0), "the same for rotation"),
+      row("seed_on_failure", "", any(),
+          "runs once where no registration placed the frame; the method retries from it (empty: off)"),
       row("backend", "", any(), "where the normal equations are reduced: cpu | opencl"),
       row("tracking_level", "", closed(0, 2), "pyramid level tracking starts at: 0 full, 1 half, 2 quarter"),
       row("constant_velocity", "", any(), "guess each motion as the last one (false: identity, KinectFusion)"),

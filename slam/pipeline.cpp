@@ -130,6 +130,10 @@ Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
     RegistrationOptions so = default_registration_options(config_.seed_registration);
     seed_ = make_registration(config_.seed_registration, so, make_backend(config_.backend));
   }
+  if (!config_.seed_on_failure.empty()) {
+    RegistrationOptions so = default_registration_options(config_.seed_on_failure);
+    failure_seed_ = make_registration(config_.seed_on_failure, so, make_backend(config_.backend));
+  }
   if (config_.relocalisation.enabled)
     appearance_ = make_appearance_index(config_.relocalisation.appearance.empty()
                                             ? default_appearance_index_name()
@@ -303,23 +307,34 @@ void Pipeline::initialise(const RgbdFrame& frame, FramePyramid& current, FrameRe
 Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_s, FrameResult* r) {
   const auto t0 = std::chrono::steady_clock::now();
   SE3 guess = config_.constant_velocity && lost_spell_ == 0 ? velocity_ : SE3();
+  std::optional<RegistrationResult> seed;  // seed_registration's estimate on this frame
+  bool seeded_guess = false;
   if (seed_) {  // a wide-baseline estimate replaces a motion prior it disagrees with (seed_registration)
-    const RegistrationResult seed = align_to_model(*seed_, current, guess);
-    const SE3 d = guess.inverse() * seed.T_ref_cur;
-    if (seed.usable() && (d.translation().norm() > config_.seed_min_motion_m ||
-                          d.angle_rad() * 180.0 / M_PI > config_.seed_min_motion_deg))
-      guess = seed.T_ref_cur;
+    seed = align_to_model(*seed_, current, guess);
+    const SE3 d = guess.inverse() * seed->T_ref_cur;
+    if (seed->usable() && (d.translation().norm() > config_.seed_min_motion_m ||
+                           d.angle_rad() * 180.0 / M_PI > config_.seed_min_motion_deg)) {
+      guess = seed->T_ref_cur;
+      seeded_guess = true;
+    }
   }
+  Verdict v = register_from(current, guess, timestamp_s, r);
+  // A guess that came from the seed already was the wide-baseline start: a retry would repeat it.
+  if (v.action != Verdict::integrate && failure_seed_ && !seeded_guess)
+    v = retry_from_seed(current, guess, timestamp_s, std::move(v), seed, r);
+  r->ms.track = ms_since(t0);
+  return v;
+}
+
+// The primary from `guess`; where the map does not take its result, the fallback from the same guess.
+Pipeline::Verdict Pipeline::register_from(const FramePyramid& current, const SE3& guess, double timestamp_s,
+                                          FrameResult* r) {
   const RegistrationResult primary_result = align_to_model(*registration_, current, guess);
   r->term_disagreement = term_disagreement(primary_result);
   Verdict primary = decide(primary_result, current, timestamp_s, registration_->name());
-  if (primary.action == Verdict::integrate || !fallback_) {
-    r->ms.track = ms_since(t0);
-    return primary;
-  }
+  if (primary.action == Verdict::integrate || !fallback_) return primary;
   Verdict fallback = decide(align_to_model(*fallback_, current, guess), current, timestamp_s,
                             config_.fallback_registration);
-  r->ms.track = ms_since(t0);
   if (fallback.action == Verdict::integrate) {
     fallback.why = registration_->name() + " rejected (" + primary.why + "); " + config_.fallback_registration +
                    " accepted";
@@ -328,33 +343,66 @@ Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_
   return primary.action == Verdict::odometry || fallback.action != Verdict::odometry ? primary : fallback;
 }
 
-Pipeline::Verdict Pipeline::decide(const RegistrationResult& reg, const FramePyramid& current, double timestamp_s,
-                                   const std::string& method) const {
-  Verdict v;
-  v.registration = reg;
-  v.method = method;
-  if (!reg.usable()) {
-    v.why = std::string("registration ") + hf::to_string(reg.status) + ": " + reg.message;
-    return v;
+// seed_on_failure: the frame was not integrated from the motion prior. Dense methods fail that way where the
+// motion left their basin (15 degrees between frames, or the frame after a lost one, tracked from the identity);
+// a method with no basin (sparse: features and RANSAC) estimates the motion once, and the dense methods retry from
+// there. The retry replaces the verdict where it does better (integrate over odometry over lose), so a seed can
+// only add frames to the map, each passing the same failure policy. seed_registration's estimate of this frame is
+// reused where it is the same method.
+Pipeline::Verdict Pipeline::retry_from_seed(const FramePyramid& current, const SE3& guess, double timestamp_s,
+                                            Verdict failed, const std::optional<RegistrationResult>& seed,
+                                            FrameResult* r) {
+  r->seeded_on_failure = true;
+  const RegistrationResult s = seed && seed_->name() == failure_seed_->name()
+                                   ? *seed
+                                   : align_to_model(*failure_seed_, current, guess);
+  if (const std::optional<std::string> why = implausible(s, timestamp_s)) {
+    failed.why += "; " + failure_seed_->name() + " seed not plausible: " + *why;
+    return failed;
   }
-  if (reg.degenerate_dims > config_.max_degenerate_dims) {
-    v.why = "registration degenerate in " + std::to_string(reg.degenerate_dims) + " directions (at most " +
-            std::to_string(config_.max_degenerate_dims) + " accepted)";
-    return v;
+  const TermDisagreement kept = r->term_disagreement;
+  Verdict retry = register_from(current, s.T_ref_cur, timestamp_s, r);
+  const bool better = retry.action == Verdict::integrate ||
+                      (retry.action == Verdict::odometry && failed.action == Verdict::lose);
+  if (!better) {
+    r->term_disagreement = kept;
+    failed.why += "; from the " + failure_seed_->name() + " seed: " + retry.why;
+    return failed;
   }
+  r->placed_by_seed = true;
+  retry.why = "from the motion prior: " + failed.why + "; from the " + failure_seed_->name() + " seed: " +
+              (retry.why.empty() ? retry.method + " accepted" : retry.why);
+  return retry;
+}
+
+// Why a registration cannot be the frame's motion before the map is asked (the failure policy's plausibility), or
+// nothing when it can.
+std::optional<std::string> Pipeline::implausible(const RegistrationResult& reg, double timestamp_s) const {
+  if (!reg.usable()) return std::string("registration ") + hf::to_string(reg.status) + ": " + reg.message;
+  if (reg.degenerate_dims > config_.max_degenerate_dims)
+    return "registration degenerate in " + std::to_string(reg.degenerate_dims) + " directions (at most " +
+           std::to_string(config_.max_degenerate_dims) + " accepted)";
   // Plausibility against the sensor clock; a frame rate of 30 Hz when stamps are missing or out of order.
   double dt = timestamp_s - last_time_s_;
   if (!(dt > 1e-6)) dt = 1.0 / 30.0;
   const double speed = reg.T_ref_cur.translation().norm() / dt;
   const double angular = (reg.T_ref_cur.angle_rad() * 180.0 / M_PI) / dt;
-  if (speed > config_.max_speed_m_per_s) {
-    v.why = "implausible motion: " + std::to_string(speed) + " m/s > max_speed_m_per_s " +
-            std::to_string(config_.max_speed_m_per_s);
-    return v;
-  }
-  if (angular > config_.max_angular_speed_deg_per_s) {
-    v.why = "implausible rotation: " + std::to_string(angular) + " deg/s > max_angular_speed_deg_per_s " +
-            std::to_string(config_.max_angular_speed_deg_per_s);
+  if (speed > config_.max_speed_m_per_s)
+    return "implausible motion: " + std::to_string(speed) + " m/s > max_speed_m_per_s " +
+           std::to_string(config_.max_speed_m_per_s);
+  if (angular > config_.max_angular_speed_deg_per_s)
+    return "implausible rotation: " + std::to_string(angular) + " deg/s > max_angular_speed_deg_per_s " +
+           std::to_string(config_.max_angular_speed_deg_per_s);
+  return std::nullopt;
+}
+
+Pipeline::Verdict Pipeline::decide(const RegistrationResult& reg, const FramePyramid& current, double timestamp_s,
+                                   const std::string& method) const {
+  Verdict v;
+  v.registration = reg;
+  v.method = method;
+  if (std::optional<std::string> why = implausible(reg, timestamp_s)) {
+    v.why = std::move(*why);
     return v;
   }
   v.T_world_cur = reference_->T_world_model * reg.T_ref_cur;

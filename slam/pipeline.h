@@ -13,7 +13,9 @@
 //                Both live in the camera frame of the last pose, so T_world_cur = T_world_ref * T_ref_cur. When
 //                that fails or disagrees with the map, fallback_registration (icp) is tried against the same model.
 //                With seed_registration set (sparse), it runs first and its estimate becomes the initial guess
-//                where it disagrees with the motion prior (large motion).
+//                where it disagrees with the motion prior (large motion). Where neither placed the frame,
+//                seed_on_failure (sparse) runs once and, from its estimate where that is plausible, the primary
+//                (then the fallback) runs again: the wide baseline costs the seed on rejected frames only.
 //                While the primary reads colour, every few frames the colour is checked against the depth
 //                (slam/colour_check.h, timed into `track`); once it is judged not registered to the depth,
 //                colour_check.depth_only_registration tracks from the next frame on.
@@ -60,7 +62,8 @@
 // in at most max_degenerate_dims directions and implies a motion below max_speed_m_per_s /
 // max_angular_speed_deg_per_s since the last pose; it is CONSISTENT when the frame's depth agrees with the model
 // depth where they overlap (min_overlap, min_consistent). Then:
-//   - plausible and consistent (primary or fallback): TRACKED (RECOVERED after lost frames), integrated;
+//   - plausible and consistent (primary or fallback, from the motion prior or, where neither was, retried from
+//     seed_on_failure's estimate): TRACKED (RECOVERED after lost frames), integrated;
 //   - plausible but not consistent, while not lost: ODOMETRY: the pose moves to the estimate and the reference is
 //     raycast there with the frame's intensity, but nothing is integrated (a frame not trusted enough to integrate
 //     must not freeze the pose, yet must not touch the map);
@@ -154,6 +157,10 @@ struct FrameResult {
   std::string method;        // the registration that placed the frame (primary, fallback, or "relocalisation")
   std::optional<RegistrationResult> registration;  // the one that placed (or failed to place) the frame
   std::string message;       // why the frame was lost (one line), empty otherwise
+  // seed_on_failure ran on this frame (neither the primary nor the fallback placed it from the motion prior), and
+  // whether the retry from its estimate is what placed the frame.
+  bool seeded_on_failure = false;
+  bool placed_by_seed = false;
   // The primary registration's two terms' disagreement (slam/colour_check.h); valid only when it has an icp and
   // a photometric term.
   TermDisagreement term_disagreement;
@@ -237,6 +244,10 @@ class Pipeline {
   FrameResult process_pinhole(const RgbdFrame& frame, FrameResult r);
   void initialise(const RgbdFrame& frame, FramePyramid& current, FrameResult* r);
   Verdict track(const FramePyramid& current, double timestamp_s, FrameResult* r);
+  Verdict register_from(const FramePyramid& current, const SE3& guess, double timestamp_s, FrameResult* r);
+  Verdict retry_from_seed(const FramePyramid& current, const SE3& guess, double timestamp_s, Verdict failed,
+                          const std::optional<RegistrationResult>& seed, FrameResult* r);
+  std::optional<std::string> implausible(const RegistrationResult& reg, double timestamp_s) const;
   Verdict decide(const RegistrationResult& reg, const FramePyramid& current, double timestamp_s,
                  const std::string& method) const;
   std::optional<Verdict> relocalise(const RgbdFrame& frame, const FramePyramid& current, FrameResult* r);
@@ -271,6 +282,7 @@ class Pipeline {
   std::unique_ptr<Registration> registration_;  // null for groundtruth
   std::unique_ptr<Registration> fallback_;      // null when none
   std::unique_ptr<Registration> seed_;          // seed_registration; null when none
+  std::unique_ptr<Registration> failure_seed_;  // seed_on_failure; null when none
   ColourCheck colour_check_;
   std::unique_ptr<Reference> reference_;        // model maps + intensity at the last pose
   KeyframeMap keyframes_;

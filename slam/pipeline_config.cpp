@@ -215,6 +215,7 @@ void visit_scalars(V&& v, PipelineConfig& c) {
   v("seed_registration", c.seed_registration);
   v("seed_min_motion_m", c.seed_min_motion_m);
   v("seed_min_motion_deg", c.seed_min_motion_deg);
+  v("seed_on_failure", c.seed_on_failure);
   v("backend", c.backend);
   v("tracking_level", c.tracking_level);
   v("constant_velocity", c.constant_velocity);
@@ -317,6 +318,11 @@ void PipelineConfig::validate() const {
     const auto names = registration_names();
     if (std::find(names.begin(), names.end(), seed_registration) == names.end())
       throw Error("unknown seed_registration '" + seed_registration + "'");
+  }
+  if (!seed_on_failure.empty()) {
+    const auto names = registration_names();
+    if (std::find(names.begin(), names.end(), seed_on_failure) == names.end())
+      throw Error("unknown seed_on_failure '" + seed_on_failure + "'");
   }
   if (!(seed_min_motion_m >= 0.0) || !(seed_min_motion_deg >= 0.0) || !std::isfinite(seed_min_motion_m) ||
       !std::isfinite(seed_min_motion_deg))

@@ -86,6 +86,8 @@ struct RunSummary {
   double voxel_m = 0.0;
   long frames = 0, frames_bad = 0, frames_lost = 0, frames_degenerate = 0, frames_poor = 0;
   long frames_odometry = 0, frames_relocalised = 0, frames_fallback = 0;  // see slam/pipeline.h TrackState
+  // Frames on which seed_on_failure ran, and those its retry placed (FrameResult::seeded_on_failure, placed_by_seed).
+  long frames_seeded_on_failure = 0, frames_placed_by_seed = 0;
   double coverage = 0.0;        // frames with a valid pose / frames
   long lost_spells = 0, longest_lost_spell = 0;  // runs of consecutive lost frames
   size_t keyframes = 0;

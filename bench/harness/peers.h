@@ -37,8 +37,8 @@ struct PeerOptions {
   float ndt_resolution_m = 0.2f;    // NDT cell size
   int pixel_stride = 2;             // back-project every k-th pixel in x and y
   bool constant_velocity = true;    // initial guess: the last inter-frame motion (else the identity)
-  double max_speed_m_per_s = 3.0;   // as slam::PipelineConfig
-  double max_angular_speed_deg_per_s = 360.0;
+  double max_speed_m_per_s = 6.0;   // as slam::PipelineConfig
+  double max_angular_speed_deg_per_s = 720.0;
   int min_points = 100;             // fewer back-projected points: lost without calling PCL
   // Throws hf::Error naming the bad field.
   void validate() const;
