@@ -66,6 +66,10 @@ struct IntegrateParams {
   // map only (the plain per-voxel loop, not the AVX2 one); the OpenCL map refuses it (hf::Error).
   float truncation_depth_ref_m = 0.0f;
   float truncation_min_fraction = 0.5f;  // the narrowest band, as a fraction of mu, in (0, 1]
+  // Observation weight by depth (hf_weight_scale): an observation at measured depth d counts observation_weight
+  // min(1, (weight_depth_ref_m / d)^2), floored at 1/8. 0 = off (every observation alike), the default; measured in
+  // bench/results/accuracy/ate_levers.md. CPU map only, as truncation_depth_ref_m.
+  float weight_depth_ref_m = 0.0f;
 };
 
 struct IntegrateStats {

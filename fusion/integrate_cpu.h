@@ -58,6 +58,7 @@ struct FrameInputs {
   const float* depth = nullptr;
   const float* incidence = nullptr;
   const float* mu_scale = nullptr;
+  const float* w_scale = nullptr;  // nullptr or hf_weight_scale per pixel (weight_depth_ref_m); plain loops only
   const hf_uint8* rgb = nullptr;
   hf_intrinsics K{};
   float mu = 0.0f;

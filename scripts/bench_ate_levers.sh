@@ -6,7 +6,8 @@
 #           7s100_199 (report), 7s0_199
 #   MODES   space-separated: off (today's defaults), sdfnoise:REF (the hand-over sdf's rows weighed by the depth
 #           noise beyond REF m), sdfminw:W (sdf's voxels seen fewer than W times count as unobserved),
-#           trunc:REF:F (integrate.truncation_depth_ref_m REF, truncation_min_fraction F)
+#           trunc:REF:F (integrate.truncation_depth_ref_m REF, truncation_min_fraction F); several joined by
+#           + (e.g. sdfnoise:1.5+trunc:3:0.5), wdepth:REF (integrate.weight_depth_ref_m REF)
 # e.g. HF_BIN=/tmp/hf bash scripts/bench_ate_levers.sh out/levers "rpy0_149 7s0_99" "off trunc:3:0.5"
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -24,15 +25,26 @@ declare -A input_dir=([rpy0_149]="$shared/tum_fr1_rpy_first150" [rpy150_269]="$s
 
 for key in $inputs; do
   for mode in $modes; do
-    IFS=: read -r lever a b <<< "$mode"
-    case "$lever" in
-      off) json='{}' ;;
-      sdfnoise) json="{\"depth_only_registration_options\": {\"depth_noise_ref_m\": $a}}" ;;
-      sdfminw) json="{\"depth_only_registration_options\": {\"min_voxel_weight\": $a}}" ;;
-      trunc) json="{\"integrate\": {\"truncation_depth_ref_m\": $a, \"truncation_min_fraction\": $b}}" ;;
-      *) echo "bench_ate_levers: unknown mode '$mode'" >&2; exit 1 ;;
-    esac
-    echo "$json" > "$work/c.json"
+    parts=()
+    IFS=+ read -r -a levers <<< "$mode"
+    for one in "${levers[@]}"; do
+      IFS=: read -r lever a b <<< "$one"
+      case "$lever" in
+        off) ;;
+        sdfnoise) parts+=("{\"depth_only_registration_options\": {\"depth_noise_ref_m\": $a}}") ;;
+        sdfminw) parts+=("{\"depth_only_registration_options\": {\"min_voxel_weight\": $a}}") ;;
+        wdepth) parts+=("{\"integrate\": {\"weight_depth_ref_m\": $a}}") ;;
+        trunc) parts+=("{\"integrate\": {\"truncation_depth_ref_m\": $a, \"truncation_min_fraction\": $b}}") ;;
+        *) echo "bench_ate_levers: unknown mode '$one'" >&2; exit 1 ;;
+      esac
+    done
+    # The levers' sections merged into one config (sections do not overlap but for the hand-over's options).
+    python3 -c 'import json, sys
+c = {}
+for p in sys.argv[1:]:
+    for k, v in json.loads(p).items():
+        c.setdefault(k, {}).update(v)
+print(json.dumps(c))' "${parts[@]}" > "$work/c.json"
     bench_run "${key}__${mode//:/_}" "${input_dir[$key]}" --config "$work/c.json"
   done
 done

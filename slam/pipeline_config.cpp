@@ -131,6 +131,7 @@ void visit(V&& v, fusion::IntegrateParams& p) {
   v("point_to_plane", p.point_to_plane);
   v("truncation_depth_ref_m", p.truncation_depth_ref_m);
   v("truncation_min_fraction", p.truncation_min_fraction);
+  v("weight_depth_ref_m", p.weight_depth_ref_m);
 }
 template <class V>
 void visit(V&& v, fusion::RaycastOptions& p) {
@@ -352,6 +353,8 @@ void PipelineConfig::validate() const {
     throw Error("integrate.truncation_depth_ref_m must be finite and >= 0");
   if (!(integrate.truncation_min_fraction > 0.0f && integrate.truncation_min_fraction <= 1.0f))
     throw Error("integrate.truncation_min_fraction must be in (0, 1]");
+  if (!(integrate.weight_depth_ref_m >= 0.0f && std::isfinite(integrate.weight_depth_ref_m)))
+    throw Error("integrate.weight_depth_ref_m must be finite and >= 0");
   if (pyramid.levels < 1 || pyramid.levels > 6) throw Error("pyramid.levels must be in [1, 6]");
   if (pyramid.fill_holes_levels < 0 || pyramid.fill_holes_levels > 8)
     throw Error("pyramid.fill_holes_levels must be in [0, 8]");

@@ -133,6 +133,16 @@ HF_INLINE float hf_truncation_scale(float ref, float min_fraction, float d) {
   return s >= 1.0f ? 1.0f : (s < min_fraction ? min_fraction : s);
 }
 
+// Observation weight by depth (IntegrateParams::weight_depth_ref_m): an observation at measured depth d counts
+// w min(1, (ref / d)^2), floored at 1/8 (the weight is stored in 1/16 steps, so a far observation still moves it),
+// the inverse of the axial noise's standard deviation beyond ref. ref <= 0: 1.
+HF_INLINE float hf_weight_scale(float ref, float d) {
+  if (!(ref > 0.0f) || !(d > 0.0f)) return 1.0f;
+  const float q = ref / d;
+  const float s = q * q;
+  return s >= 1.0f ? 1.0f : (s < 0.125f ? 0.125f : s);
+}
+
 // hf_observe_voxel_at with a per-pixel truncation: mu_scale is 0 (every pixel's band is mu) or a map of
 // hf_truncation_scale per pixel. Where the map holds s, the band is mu_d = s mu: a voxel more than mu_d behind the
 // measurement is hidden, the value is clamped to [-mu_d, mu_d] and divided by mu (so it lies in [-s, s]), and
@@ -186,12 +196,15 @@ HF_INLINE int hf_integrate_voxel_at(HF_GLOBAL hf_voxel* voxel, float z, int idx,
   return 1;
 }
 
-// The same with a per-pixel truncation map (hf_observe_voxel_mu; 0: hf_integrate_voxel_at).
+// The same with a per-pixel truncation map (hf_observe_voxel_mu) and a per-pixel factor of the observation weight
+// w_scale (hf_weight_scale); both 0: hf_integrate_voxel_at, the same bits.
 HF_INLINE int hf_integrate_voxel_mu(HF_GLOBAL hf_voxel* voxel, float z, int idx, HF_GLOBAL const float* depth,
                                     HF_GLOBAL const float* incidence, HF_GLOBAL const float* mu_scale,
-                                    HF_GLOBAL const hf_uint8* rgb, float mu, float max_weight, float w) {
+                                    HF_GLOBAL const float* w_scale, HF_GLOBAL const hf_uint8* rgb, float mu,
+                                    float max_weight, float w) {
   hf_tsdf_observation obs;
   if (!hf_observe_voxel_mu(z, idx, depth, incidence, mu_scale, rgb, mu, &obs)) return 0;
+  if (w_scale != 0) w *= w_scale[idx];
   *voxel = hf_tsdf_update(*voxel, obs.tsdf, w, max_weight, obs.colour_valid, obs.r, obs.g, obs.b);
   return 1;
 }
@@ -257,12 +270,14 @@ HF_INLINE int hf_deintegrate_voxel_at(HF_GLOBAL hf_voxel* voxel, float z, int id
   return 1;
 }
 
-// The same with a per-pixel truncation map (hf_observe_voxel_mu; 0: hf_deintegrate_voxel_at).
+// The same with the per-pixel maps of hf_integrate_voxel_mu (both 0: hf_deintegrate_voxel_at).
 HF_INLINE int hf_deintegrate_voxel_mu(HF_GLOBAL hf_voxel* voxel, float z, int idx, HF_GLOBAL const float* depth,
                                       HF_GLOBAL const float* incidence, HF_GLOBAL const float* mu_scale,
-                                      HF_GLOBAL const hf_uint8* rgb, float mu, float w) {
+                                      HF_GLOBAL const float* w_scale, HF_GLOBAL const hf_uint8* rgb, float mu,
+                                      float w) {
   hf_tsdf_observation obs;
   if (voxel->weight == 0 || !hf_observe_voxel_mu(z, idx, depth, incidence, mu_scale, rgb, mu, &obs)) return 0;
+  if (w_scale != 0) w *= w_scale[idx];
   *voxel = hf_tsdf_downdate(*voxel, obs.tsdf, w, obs.colour_valid, obs.r, obs.g, obs.b);
   return 1;
 }

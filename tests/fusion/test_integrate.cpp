@@ -10,6 +10,7 @@
 
 #include "datasets/presets.h"
 #include "datasets/synthetic_sequence.h"
+#include "fusion/deintegrate.h"
 #include "fusion/kernels/integrate_kernels.h"
 #include "fusion/volume_io.h"
 #include "tests/common/analytic_depth.h"
@@ -477,6 +478,47 @@ TEST(Integrate, DepthDependentTruncationFollowsTheFormula) {
     EXPECT_GT(hidden_now, 1000u);
     // Bound as FrontoParallelPlaneGivesAnalyticSdf's: half an int16 step plus float depth and positions over mu.
     EXPECT_LT(max_err, 0.5 / HF_SDF_SCALE + 2e-5) << "plane at " << plane_z;
+  }
+}
+
+// Observation weight by depth (IntegrateParams::weight_depth_ref_m): a fronto-parallel plane at depth d fused twice
+// gives every observed voxel the weight 2 min(1, max(1/8, (ref / d)^2)) (exact in the 1/16 steps the weight is
+// stored in for these d) and the same value as unweighted fusion; deintegrating one frame leaves one observation.
+TEST(Integrate, DepthWeightFollowsTheFormula) {
+  EXPECT_EQ(hf_weight_scale(0.0f, 3.0f), 1.0f);  // off
+  EXPECT_EQ(hf_weight_scale(1.5f, 1.0f), 1.0f);
+  EXPECT_EQ(hf_weight_scale(1.5f, 3.0f), 0.25f);
+  EXPECT_EQ(hf_weight_scale(1.0f, 4.0f), 0.125f);  // (1/4)^2 = 1/16, floored
+  const PinholeCamera camera = small_camera();
+  const VolumeParams volume = integrate_params_1cm();
+  for (const double plane_z : {1.0, 3.0}) {
+    IntegrateParams params;
+    params.weight_depth_ref_m = 1.5f;
+    const float expected_w = 2.0f * hf_weight_scale(1.5f, float(plane_z));
+    const DepthImage depth = render_plane_depth(camera, SE3::identity(), Eigen::Vector3d::UnitZ(), plane_z);
+    VoxelBlockGrid grid(volume), off(volume);
+    for (int i = 0; i < 2; ++i) {
+      integrate(grid, depth, ColorImage(), camera, SE3::identity(), params);
+      integrate(off, depth, ColorImage(), camera, SE3::identity());
+    }
+    size_t checked = 0;
+    for (const auto& [c, block] : off.blocks()) {
+      const VoxelBlock* b = grid.find(c);
+      ASSERT_NE(b, nullptr);
+      for (size_t i = 0; i < block->voxels.size(); ++i) {
+        if (block->voxels[i].weight == 0) continue;
+        ASSERT_EQ(hf_voxel_weight(b->voxels[i]), expected_w) << plane_z;
+        ASSERT_EQ(b->voxels[i].sdf, block->voxels[i].sdf);
+        ++checked;
+      }
+    }
+    EXPECT_GT(checked, 5000u);
+    deintegrate(grid, depth, ColorImage(), camera, SE3::identity(), params);
+    for (const auto& [c, block] : grid.blocks())
+      for (const Voxel& v : block->voxels)
+        if (v.weight != 0) {
+          ASSERT_EQ(hf_voxel_weight(v), expected_w / 2) << plane_z;
+        }
   }
 }
 
