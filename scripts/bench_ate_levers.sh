@@ -7,7 +7,8 @@
 #   MODES   space-separated: off (today's defaults), sdfnoise:REF (the hand-over sdf's rows weighed by the depth
 #           noise beyond REF m), sdfminw:W (sdf's voxels seen fewer than W times count as unobserved),
 #           trunc:REF:F (integrate.truncation_depth_ref_m REF, truncation_min_fraction F); several joined by
-#           + (e.g. sdfnoise:1.5+trunc:3:0.5), wdepth:REF (integrate.weight_depth_ref_m REF)
+#           + (e.g. sdfnoise:1.5+trunc:3:0.5), wdepth:REF (integrate.weight_depth_ref_m REF), sdfkey:KEY:VALUE (any
+#           key of the hand-over sdf, e.g. sdfkey:robust_sdf:student_t)
 # e.g. HF_BIN=/tmp/hf bash scripts/bench_ate_levers.sh out/levers "rpy0_149 7s0_99" "off trunc:3:0.5"
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -33,6 +34,8 @@ for key in $inputs; do
         off) ;;
         sdfnoise) parts+=("{\"depth_only_registration_options\": {\"depth_noise_ref_m\": $a}}") ;;
         sdfminw) parts+=("{\"depth_only_registration_options\": {\"min_voxel_weight\": $a}}") ;;
+        sdfkey) [[ "$b" =~ ^-?[0-9.]+$ ]] || b="\"$b\""  # a number as it is, else a string
+                parts+=("{\"depth_only_registration_options\": {\"$a\": $b}}") ;;
         wdepth) parts+=("{\"integrate\": {\"weight_depth_ref_m\": $a}}") ;;
         trunc) parts+=("{\"integrate\": {\"truncation_depth_ref_m\": $a, \"truncation_min_fraction\": $b}}") ;;
         *) echo "bench_ate_levers: unknown mode '$one'" >&2; exit 1 ;;
