@@ -249,15 +249,43 @@ void update_blocks(VoxelUpdate op, const VolumeParams& volume,
     stats->incidence_ms = ms_since(t_inc);
   }
 
+  // Per-pixel truncation scale (hf_truncation_scale) when the band follows the depth noise.
+  std::vector<float> mu_scale;
+  if (params.truncation_depth_ref_m > 0.0f) {
+    const int W = depth.width();
+    mu_scale.resize(size_t(W) * depth.height());
+    parallel_for_rows(depth.height(), [&](int v) {
+      const size_t row = size_t(v) * W;
+      for (int u = 0; u < W; ++u)
+        mu_scale[row + u] =
+            hf_truncation_scale(params.truncation_depth_ref_m, params.truncation_min_fraction, depth_px[row + u]);
+    });
+  }
+
+  // Per-pixel factor of the observation weight (hf_weight_scale) when far observations count less.
+  std::vector<float> w_scale;
+  if (params.weight_depth_ref_m > 0.0f) {
+    const int W = depth.width();
+    w_scale.resize(size_t(W) * depth.height());
+    parallel_for_rows(depth.height(), [&](int v) {
+      const size_t row = size_t(v) * W;
+      for (int u = 0; u < W; ++u) w_scale[row + u] = hf_weight_scale(params.weight_depth_ref_m, depth_px[row + u]);
+    });
+  }
+
   FrameInputs frame;
   frame.depth = depth_px;
+  frame.w_scale = w_scale.empty() ? nullptr : w_scale.data();
   frame.incidence = incidence.empty() ? nullptr : incidence.data();
+  frame.mu_scale = mu_scale.empty() ? nullptr : mu_scale.data();
   frame.rgb = colour.empty() ? nullptr : reinterpret_cast<const hf_uint8*>(colour.data());
   frame.K = K;
   frame.mu = mu;
   frame.max_weight = volume.max_weight;
   frame.w = params.observation_weight;
-  const bool simd = cpu_has_avx2() && size_t(depth.width()) * size_t(depth.height()) >= 2;
+  // The AVX2 spellings have no per-pixel truncation or weight: the plain loops (the specification) when one is on.
+  const bool simd = cpu_has_avx2() && size_t(depth.width()) * size_t(depth.height()) >= 2 && mu_scale.empty() &&
+                    w_scale.empty();
 
   tbb::combinable<size_t> updated([] { return size_t(0); });
   tbb::combinable<size_t> in_view([] { return size_t(0); });

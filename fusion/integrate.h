@@ -58,6 +58,18 @@ struct IntegrateParams {
   // So it is off by default (the SLAM pipeline fuses rooms from a trajectory) and on for objects scanned from all
   // around.
   bool point_to_plane = false;
+  // Depth-dependent truncation (hf_truncation_scale, fusion/kernels/integrate_kernels.h): an observation at
+  // measured depth d has the band mu * min(1, max(truncation_min_fraction, (d / truncation_depth_ref_m)^2)), as
+  // the sensor's axial noise grows as d^2; values stay in units of the volume's mu, so the raycast and the sdf
+  // tracker read the map unchanged. 0 = off (every band mu, KinectFusion), the default: measured in
+  // bench/results/accuracy/ate_levers.md. The band only shrinks (allocation stays [d - mu, d + mu]). On the CPU
+  // map only (the plain per-voxel loop, not the AVX2 one); the OpenCL map refuses it (hf::Error).
+  float truncation_depth_ref_m = 0.0f;
+  float truncation_min_fraction = 0.5f;  // the narrowest band, as a fraction of mu, in (0, 1]
+  // Observation weight by depth (hf_weight_scale): an observation at measured depth d counts observation_weight
+  // min(1, (weight_depth_ref_m / d)^2), floored at 1/8. 0 = off (every observation alike), the default; measured in
+  // bench/results/accuracy/ate_levers.md. CPU map only, as truncation_depth_ref_m.
+  float weight_depth_ref_m = 0.0f;
 };
 
 struct IntegrateStats {

@@ -73,8 +73,8 @@ int update_block(Voxel* voxels, const BlockFrame& b, const FrameInputs& in, bool
       project_row(b, y, z, in.K, pz, pixel);
       Voxel* row = voxels + hf_voxel_index(0, y, z);
       for (int x = 0; x < HF_BLOCK_SIZE; ++x) {
-        if (pixel[x] >= 0 && hf_integrate_voxel_at(row + x, pz[x], pixel[x], in.depth, in.incidence, in.rgb, in.mu,
-                                                   in.max_weight, in.w)) {
+        if (pixel[x] >= 0 && hf_integrate_voxel_mu(row + x, pz[x], pixel[x], in.depth, in.incidence, in.mu_scale,
+                                                   in.w_scale, in.rgb, in.mu, in.max_weight, in.w)) {
           ++updated;
           surface |= row[x].weight != 0 && row[x].sdf <= 0;
         }
@@ -95,7 +95,8 @@ int deintegrate_block(Voxel* voxels, const BlockFrame& b, const FrameInputs& in)
       Voxel* row = voxels + hf_voxel_index(0, y, z);
       for (int x = 0; x < HF_BLOCK_SIZE; ++x)
         if (pixel[x] >= 0)
-          updated += hf_deintegrate_voxel_at(row + x, pz[x], pixel[x], in.depth, in.incidence, in.rgb, in.mu, in.w);
+          updated += hf_deintegrate_voxel_mu(row + x, pz[x], pixel[x], in.depth, in.incidence, in.mu_scale,
+                                             in.w_scale, in.rgb, in.mu, in.w);
     }
   }
   return updated;
@@ -278,6 +279,8 @@ HF_AVX2_INLINE __m256i quantise_weight(__m256 weight, const BlockLanes& l) {
 
 HF_AVX2 int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInputs& in, bool* wrote_surface) {
   if (in.K.width * in.K.height < 2) throw Error("update_block_avx2: the image must have at least two pixels");
+  if (in.mu_scale != nullptr || in.w_scale != nullptr)
+    throw Error("update_block_avx2: no per-pixel truncation or weight (the plain loop has them)");
   const BlockLanes l = block_lanes(b, in);
   int updated = 0;
   __m256i surface = _mm256_setzero_si256();  // lanes that wrote an observed sdf <= 0
@@ -335,6 +338,8 @@ HF_AVX2 int update_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInp
 
 HF_AVX2 int deintegrate_block_avx2(Voxel* voxels, const BlockFrame& b, const FrameInputs& in) {
   if (in.K.width * in.K.height < 2) throw Error("deintegrate_block_avx2: the image must have at least two pixels");
+  if (in.mu_scale != nullptr || in.w_scale != nullptr)
+    throw Error("deintegrate_block_avx2: no per-pixel truncation or weight (the plain loop has them)");
   const BlockLanes l = block_lanes(b, in);
   int updated = 0;
   for (int z = 0; z < HF_BLOCK_SIZE; ++z) {

@@ -51,10 +51,14 @@ void band_row_avx2(const float* depth, int width, const double* ray_x, double ra
 
 // What a frame brings to every block: its depth (metres, row-major K.width x K.height, 0 = none), the optional
 // point-to-plane factors (nullptr = projective) and colour (3 bytes per pixel, nullptr = none), truncation mu
-// (metres), the weight cap and the observation weight.
+// (metres), the weight cap and the observation weight. mu_scale: nullptr (every band mu) or the per-pixel
+// truncation scale of IntegrateParams::truncation_depth_ref_m (hf_truncation_scale); only the plain loops read it
+// (integrate() takes them when it is set; the AVX2 spellings throw hf::Error).
 struct FrameInputs {
   const float* depth = nullptr;
   const float* incidence = nullptr;
+  const float* mu_scale = nullptr;
+  const float* w_scale = nullptr;  // nullptr or hf_weight_scale per pixel (weight_depth_ref_m); plain loops only
   const hf_uint8* rgb = nullptr;
   hf_intrinsics K{};
   float mu = 0.0f;

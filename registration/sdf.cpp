@@ -136,6 +136,7 @@ class SdfMethod final : public DenseMethod {
   explicit SdfMethod(const SdfOptions& options)
       : options_(options), table_(flat_, true), pool_(flat_, false) {
     params_.k.max_abs_sdf = options.max_abs_sdf;
+    params_.k.depth_noise_ref_m = options.depth_noise_ref_m;
     params_.min_voxel_weight = options.min_voxel_weight;
     // VolumeSampler's rule: weight 0 (never observed) is always unobserved.
     params_.k.min_weight_raw = std::max(1, int(hf_quantise_weight(std::max(0.0f, options.min_voxel_weight))));
@@ -236,6 +237,7 @@ void SdfOptions::visit(OptionVisitor& v) {
   v("huber_sdf_m", huber_sdf_m);
   v("t_sigma_sdf_m", t_sigma_sdf_m);
   v("t_dof_sdf", t_dof_sdf);
+  v("depth_noise_ref_m", depth_noise_ref_m);
   v("own_voxel_m", own_voxel_m);
   v("own_truncation_vox", own_truncation_vox);
 }
@@ -247,6 +249,8 @@ void SdfOptions::validate() const {
   require_option(finite_positive(huber_sdf_m), "huber_sdf_m must be finite and > 0");
   require_option(finite_positive(t_sigma_sdf_m), "t_sigma_sdf_m must be finite and > 0");
   require_option(finite_positive(t_dof_sdf), "t_dof_sdf must be finite and > 0");
+  require_option(std::isfinite(depth_noise_ref_m) && depth_noise_ref_m >= 0.0f,
+                 "depth_noise_ref_m must be finite and >= 0");
   require_option(own_voxel_m > 0.0 && own_voxel_m <= 1.0, "own_voxel_m must be in (0, 1] metres");
   require_option(own_truncation_vox >= 1.0 && own_truncation_vox <= 64.0, "own_truncation_vox must be in [1, 64]");
 }

@@ -42,6 +42,11 @@ struct SdfOptions : MethodOptionsBase<SdfOptions> {
   float huber_sdf_m = 0.01f;
   float t_sigma_sdf_m = 0.01f;
   float t_dof_sdf = 5.0f;
+  // Rows weighed by the depth sensor's noise beyond depth_noise_ref_m, as icp's (IcpOptions::depth_noise_ref_m;
+  // hf_reg_depth_noise_scale): a point at depth z > ref counts (ref / z)^4 of a nearer one and the robust kernel
+  // sees its distance scaled by (ref / z)^2. 0: every row alike, the default (measured through the pipeline's
+  // hand-over on 7-Scenes: bench/results/accuracy/ate_levers.md).
+  float depth_noise_ref_m = 0.0f;
   // The volume the method fuses the reference into when no map was set (pairwise use). 6 voxels, not the map's 4:
   // on the noisy room pair of tests/registration/test_accuracy.cpp 2.81 vs 3.08 mm at finest_level_step 1 (2.67
   // mm at 2; the wider band averages a one-frame field over more depth); 5 mm voxels halve the basin and miss the

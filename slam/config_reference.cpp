@@ -60,6 +60,9 @@ std::vector<ConfigKey> make_reference() {
       row("integrate.max_depth_m", "m", above(0), "farther depth is not fused (noise grows as depth squared)"),
       row("integrate.observation_weight", "", above(0), "weight of each observation in the running average"),
       row("integrate.point_to_plane", "", any(), "signed distance along the surface normal, not the ray"),
+      row("integrate.truncation_depth_ref_m", "m", at_least(0), "band mu (d / this)^2 nearer than this (0: off)"),
+      row("integrate.truncation_min_fraction", "", open_closed(0, 1), "the narrowest band, a fraction of mu"),
+      row("integrate.weight_depth_ref_m", "m", at_least(0), "observations beyond this weigh (this / d)^2 (0: off)"),
       // raycast (fusion/raycast.h): the tracking raycast
       row("raycast.min_depth_m", "m", above(0), "rays start this far from the camera"),
       row("raycast.max_depth_m", "m", above(0), "and end this far"),

@@ -259,7 +259,9 @@ void Pipeline::check_colour(const FramePyramid& current, FrameResult* r) {
   const bool decided = colour_check_.add(*r->colour_alignment, r->index);
   r->ms.track += ms_since(t0);
   if (!decided || colour_check_.verdict() != ColourVerdict::unregistered) return;
-  RegistrationOptions o = pipeline_registration_options(config_.colour_check.depth_only_registration);
+  RegistrationOptions o = config_.depth_only_registration_options
+                             ? *config_.depth_only_registration_options
+                             : pipeline_registration_options(config_.colour_check.depth_only_registration);
   o.driver.iterations = registration_->options().driver.iterations;
   registration_ = make_registration(config_.colour_check.depth_only_registration, o, make_backend(config_.backend));
   if (fallback_ && fallback_->name() == registration_->name()) fallback_.reset();

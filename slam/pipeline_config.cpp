@@ -129,6 +129,9 @@ void visit(V&& v, fusion::IntegrateParams& p) {
   v("max_depth_m", p.max_depth_m);
   v("observation_weight", p.observation_weight);
   v("point_to_plane", p.point_to_plane);
+  v("truncation_depth_ref_m", p.truncation_depth_ref_m);
+  v("truncation_min_fraction", p.truncation_min_fraction);
+  v("weight_depth_ref_m", p.weight_depth_ref_m);
 }
 template <class V>
 void visit(V&& v, fusion::RaycastOptions& p) {
@@ -352,6 +355,12 @@ void PipelineConfig::validate() const {
     throw Error("integrate: need 0 <= min_depth_m < max_depth_m (finite)");
   if (!(integrate.observation_weight > 0 && std::isfinite(integrate.observation_weight)))
     throw Error("integrate.observation_weight must be positive");
+  if (!(integrate.truncation_depth_ref_m >= 0.0f && std::isfinite(integrate.truncation_depth_ref_m)))
+    throw Error("integrate.truncation_depth_ref_m must be finite and >= 0");
+  if (!(integrate.truncation_min_fraction > 0.0f && integrate.truncation_min_fraction <= 1.0f))
+    throw Error("integrate.truncation_min_fraction must be in (0, 1]");
+  if (!(integrate.weight_depth_ref_m >= 0.0f && std::isfinite(integrate.weight_depth_ref_m)))
+    throw Error("integrate.weight_depth_ref_m must be finite and >= 0");
   if (pyramid.levels < 1 || pyramid.levels > 6) throw Error("pyramid.levels must be in [1, 6]");
   if (pyramid.fill_holes_levels < 0 || pyramid.fill_holes_levels > 8)
     throw Error("pyramid.fill_holes_levels must be in [0, 8]");
@@ -361,6 +370,7 @@ void PipelineConfig::validate() const {
   if (tracking_raycast_dilate_px < 0 || tracking_raycast_dilate_px > 16)
     throw Error("tracking_raycast_dilate_px must be in [0, 16]");
   if (registration_options) registration_options->validate();
+  if (depth_only_registration_options) depth_only_registration_options->validate();
   if (!(max_speed_m_per_s > 0)) throw Error("max_speed_m_per_s must be positive");
   if (!(max_angular_speed_deg_per_s > 0)) throw Error("max_angular_speed_deg_per_s must be positive");
   if (max_degenerate_dims < 0 || max_degenerate_dims > 6) throw Error("max_degenerate_dims must be in [0, 6]");
@@ -385,6 +395,10 @@ nlohmann::json config_to_json(const PipelineConfig& config) {
   // Always write the options in force, so a report says exactly what ran.
   RegistrationOptions r = c.registration == "groundtruth" ? RegistrationOptions{} : effective_registration_options(c);
   j["registration_options"] = section_to_json(r);
+  if (c.depth_only_registration_options) {
+    RegistrationOptions d = *c.depth_only_registration_options;
+    j["depth_only_registration_options"] = section_to_json(d);
+  }
   return j;
 }
 
@@ -399,7 +413,7 @@ PipelineConfig pipeline_config_from_json_unnamed(const nlohmann::json& j, const 
   // The method first: the registration options start from its defaults.
   static const char* sections[] = {"volume", "integrate", "raycast", "pyramid", "registration_options",
                                    "keyframes", "relocalisation", "loop_closure", "reintegration",
-                                   "colour_check"};
+                                   "colour_check", "depth_only_registration_options"};
   for (auto it = j.begin(); it != j.end(); ++it) {
     const std::string& k = it.key();
     if (std::find(std::begin(sections), std::end(sections), k) != std::end(sections)) continue;
@@ -419,6 +433,11 @@ PipelineConfig pipeline_config_from_json_unnamed(const nlohmann::json& j, const 
   if (j.contains("reintegration"))
     section_from_json(j["reintegration"], where + ": reintegration", c.reintegration);
   if (j.contains("colour_check")) section_from_json(j["colour_check"], where + ": colour_check", c.colour_check);
+  if (j.contains("depth_only_registration_options") && !j["depth_only_registration_options"].is_null()) {
+    RegistrationOptions r = pipeline_registration_options(c.colour_check.depth_only_registration);
+    section_from_json(j["depth_only_registration_options"], where + ": depth_only_registration_options", r);
+    c.depth_only_registration_options = r;
+  }
   if (j.contains("registration_options") && !j["registration_options"].is_null()) {
     RegistrationOptions r =
         c.registration == "groundtruth" ? RegistrationOptions{} : effective_registration_options(c);

@@ -112,6 +112,10 @@ struct PipelineConfig {
   // it is not, tracking goes on with colour_check.depth_only_registration. Only while `registration` reads colour
   // (Registration::reads_colour); for a depth-only method the check stays undecided.
   ColourCheckOptions colour_check;
+  // The options of colour_check.depth_only_registration once it takes over (the JSON section
+  // "depth_only_registration_options", that method's keys); unset = pipeline_registration_options(that method).
+  // Written to report.json only when set.
+  std::optional<RegistrationOptions> depth_only_registration_options;
 
   // Throws hf::Error naming the bad field (also validates the nested option structs).
   void validate() const;

@@ -120,30 +120,69 @@ typedef struct {
   float r, g, b;     // the colour pixel, 0 .. 255, when colour_valid
 } hf_tsdf_observation;
 
-HF_INLINE int hf_observe_voxel_at(float z, int idx, HF_GLOBAL const float* depth, HF_GLOBAL const float* incidence,
-                                  HF_GLOBAL const hf_uint8* rgb, float mu, hf_tsdf_observation* obs) {
+// Depth-dependent truncation (IntegrateParams::truncation_depth_ref_m): the band of an observation at measured depth
+// d is mu_d = mu * s(d) with s(d) = min(1, max(min_fraction, (d / ref)^2)), the Kinect's axial noise growing as d^2
+// (Nguyen et al. 2012): near pixels, whose noise is a few millimetres, carve and average over a narrower band, so
+// a near surface is not smeared over the whole mu. Values stay normalised by the volume's mu (what the raycast and
+// the sdf tracker multiply by), so an observation's value lies in [-s, s]: a truncated value of s(d) still means
+// "at least mu_d away", and trilinear samples mix views of different bands in the same unit. ref <= 0: s = 1.
+HF_INLINE float hf_truncation_scale(float ref, float min_fraction, float d) {
+  if (!(ref > 0.0f) || !(d > 0.0f)) return 1.0f;
+  const float q = d / ref;
+  const float s = q * q;
+  return s >= 1.0f ? 1.0f : (s < min_fraction ? min_fraction : s);
+}
+
+// Observation weight by depth (IntegrateParams::weight_depth_ref_m): an observation at measured depth d counts
+// w min(1, (ref / d)^2), floored at 1/8 (the weight is stored in 1/16 steps, so a far observation still moves it),
+// the inverse of the axial noise's standard deviation beyond ref. ref <= 0: 1.
+HF_INLINE float hf_weight_scale(float ref, float d) {
+  if (!(ref > 0.0f) || !(d > 0.0f)) return 1.0f;
+  const float q = ref / d;
+  const float s = q * q;
+  return s >= 1.0f ? 1.0f : (s < 0.125f ? 0.125f : s);
+}
+
+// hf_observe_voxel_at with a per-pixel truncation: mu_scale is 0 (every pixel's band is mu) or a map of
+// hf_truncation_scale per pixel. Where the map holds s, the band is mu_d = s mu: a voxel more than mu_d behind the
+// measurement is hidden, the value is clamped to [-mu_d, mu_d] and divided by mu (so it lies in [-s, s]), and
+// colour comes only from inside the band. With mu_scale = 0 it is hf_observe_voxel_at, the same bits.
+HF_INLINE int hf_observe_voxel_mu(float z, int idx, HF_GLOBAL const float* depth, HF_GLOBAL const float* incidence,
+                                  HF_GLOBAL const float* mu_scale, HF_GLOBAL const hf_uint8* rgb, float mu,
+                                  hf_tsdf_observation* obs) {
   float d = depth[idx];
   if (!(d > 0.0f) || !hf_isfinite(d)) return 0;
+  float s = 1.0f;
+  float band = mu;
+  if (mu_scale != 0) {
+    s = mu_scale[idx];
+    band = mu * s;
+  }
   float eta = d - z;
-  if (eta < -mu) return 0;
+  if (eta < -band) return 0;
   float sdf = eta;
   if (incidence != 0) {
     float c = incidence[idx];
     if (c > 0.0f) sdf = eta * c;
   }
   // The factor reaches |(x/z, y/z, 1)| > 1 for off-axis rays meeting a surface head-on: clamp at -1 as well.
-  obs->tsdf = sdf >= mu ? 1.0f : (sdf <= -mu ? -1.0f : sdf / mu);
+  obs->tsdf = sdf >= band ? s : (sdf <= -band ? -s : sdf / mu);
   obs->colour_valid = 0;
   obs->r = 0.0f;
   obs->g = 0.0f;
   obs->b = 0.0f;
-  if (rgb != 0 && eta < mu) {
+  if (rgb != 0 && eta < band) {
     obs->colour_valid = 1;
     obs->r = (float)rgb[3 * idx];
     obs->g = (float)rgb[3 * idx + 1];
     obs->b = (float)rgb[3 * idx + 2];
   }
   return 1;
+}
+
+HF_INLINE int hf_observe_voxel_at(float z, int idx, HF_GLOBAL const float* depth, HF_GLOBAL const float* incidence,
+                                  HF_GLOBAL const hf_uint8* rgb, float mu, hf_tsdf_observation* obs) {
+  return hf_observe_voxel_mu(z, idx, depth, incidence, 0, rgb, mu, obs);
 }
 
 // The per-voxel step of integrate: the observation (hf_observe_voxel_at) averaged in by eqs. 57-58 with weight w.
@@ -153,6 +192,19 @@ HF_INLINE int hf_integrate_voxel_at(HF_GLOBAL hf_voxel* voxel, float z, int idx,
                                     float max_weight, float w) {
   hf_tsdf_observation obs;
   if (!hf_observe_voxel_at(z, idx, depth, incidence, rgb, mu, &obs)) return 0;
+  *voxel = hf_tsdf_update(*voxel, obs.tsdf, w, max_weight, obs.colour_valid, obs.r, obs.g, obs.b);
+  return 1;
+}
+
+// The same with a per-pixel truncation map (hf_observe_voxel_mu) and a per-pixel factor of the observation weight
+// w_scale (hf_weight_scale); both 0: hf_integrate_voxel_at, the same bits.
+HF_INLINE int hf_integrate_voxel_mu(HF_GLOBAL hf_voxel* voxel, float z, int idx, HF_GLOBAL const float* depth,
+                                    HF_GLOBAL const float* incidence, HF_GLOBAL const float* mu_scale,
+                                    HF_GLOBAL const float* w_scale, HF_GLOBAL const hf_uint8* rgb, float mu,
+                                    float max_weight, float w) {
+  hf_tsdf_observation obs;
+  if (!hf_observe_voxel_mu(z, idx, depth, incidence, mu_scale, rgb, mu, &obs)) return 0;
+  if (w_scale != 0) w *= w_scale[idx];
   *voxel = hf_tsdf_update(*voxel, obs.tsdf, w, max_weight, obs.colour_valid, obs.r, obs.g, obs.b);
   return 1;
 }
@@ -214,6 +266,18 @@ HF_INLINE int hf_deintegrate_voxel_at(HF_GLOBAL hf_voxel* voxel, float z, int id
                                       float w) {
   hf_tsdf_observation obs;
   if (voxel->weight == 0 || !hf_observe_voxel_at(z, idx, depth, incidence, rgb, mu, &obs)) return 0;
+  *voxel = hf_tsdf_downdate(*voxel, obs.tsdf, w, obs.colour_valid, obs.r, obs.g, obs.b);
+  return 1;
+}
+
+// The same with the per-pixel maps of hf_integrate_voxel_mu (both 0: hf_deintegrate_voxel_at).
+HF_INLINE int hf_deintegrate_voxel_mu(HF_GLOBAL hf_voxel* voxel, float z, int idx, HF_GLOBAL const float* depth,
+                                      HF_GLOBAL const float* incidence, HF_GLOBAL const float* mu_scale,
+                                      HF_GLOBAL const float* w_scale, HF_GLOBAL const hf_uint8* rgb, float mu,
+                                      float w) {
+  hf_tsdf_observation obs;
+  if (voxel->weight == 0 || !hf_observe_voxel_mu(z, idx, depth, incidence, mu_scale, rgb, mu, &obs)) return 0;
+  if (w_scale != 0) w *= w_scale[idx];
   *voxel = hf_tsdf_downdate(*voxel, obs.tsdf, w, obs.colour_valid, obs.r, obs.g, obs.b);
   return 1;
 }

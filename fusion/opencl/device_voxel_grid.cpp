@@ -235,6 +235,9 @@ IntegrateStats DeviceVoxelGrid::integrate(const DepthImage& depth, const ColorIm
                                           const PinholeCamera& camera, const SE3& T_world_camera,
                                           const IntegrateParams& params) {
   detail::check_frame_sizes(depth, colour, camera);
+  if (params.truncation_depth_ref_m > 0.0f || params.weight_depth_ref_m > 0.0f)
+    throw Error("DeviceVoxelGrid::integrate: integrate.truncation_depth_ref_m and weight_depth_ref_m are on the CPU "
+                "map only");
   Impl& m = *impl_;
   m.check_map_unpublished("integrate");
   IntegrateStats stats;

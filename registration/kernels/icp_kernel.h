@@ -25,11 +25,7 @@ typedef struct {
 // model's voxels, calibration, timing) that do not shrink with depth dominate. So sigma(z) = sigma_ref max(1,
 // (z / ref)^2): the row of a point measured at depth z is scaled by s = min(1, ref / z)^2 (weight s^2, the robust
 // kernel applied to s r, i.e. in the units of a residual at or nearer than ref). ref <= 0: s = 1.
-HF_INLINE float hf_icp_depth_scale(float ref, float z) {
-  if (!(ref > 0.0f) || !(z > 0.0f)) return 1.0f;
-  const float q = ref / z;
-  return q < 1.0f ? q * q : 1.0f;
-}
+HF_INLINE float hf_icp_depth_scale(float ref, float z) { return hf_reg_depth_noise_scale(ref, z); }
 
 // Returns 1 and fills *row when pixel (x, y) of the current frame has a correspondence, else 0.
 // The current and the reference camera share K.

@@ -147,6 +147,15 @@ HF_INLINE float hf_reg_term_weight(hf_reg_robust robust, float r) {
   return hf_reg_robust_weight(robust.type, r, robust.scale, robust.t_dof);
 }
 
+// The depth sensor's noise as a row scale: sigma(z) = sigma_ref max(1, (z / ref)^2) (structured light and ToF,
+// Nguyen et al. 2012), so a row measured at depth z is scaled by s = min(1, ref / z)^2 (weight s^2, the robust
+// kernel on s r). ref <= 0 or z <= 0: s = 1. icp's and sdf's depth_noise_ref_m (hf_icp_depth_scale is this).
+HF_INLINE float hf_reg_depth_noise_scale(float ref, float z) {
+  if (!(ref > 0.0f) || !(z > 0.0f)) return 1.0f;
+  const float q = ref / z;
+  return q < 1.0f ? q * q : 1.0f;
+}
+
 // Adds one row to the 29 sums (order at the top of this file).
 HF_INLINE void hf_reg_accumulate(const hf_reg_row* row, hf_reg_sum_t* sums) {
   const hf_reg_sum_t w = (hf_reg_sum_t)row->w;

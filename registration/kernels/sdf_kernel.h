@@ -33,6 +33,7 @@ typedef struct {
   hf_uint32 table_mask;        // the flat map (hf_sdf_pixel only): entries - 1, the home shift, look-up bound
   int table_shift;
   int table_max_probe;
+  float depth_noise_ref_m;     // 0: off; else rows scaled by s = min(1, ref / z)^2, z = v.z (hf_reg_depth_noise_scale)
 } hf_sdf_params;
 
 // Step one: the moved vertex *v = T vc and its cell in the map (cell[3], fractional offsets frac[3]); 0 when the
@@ -67,7 +68,10 @@ HF_INLINE int hf_sdf_row(const float* raw, const float* frac, hf_float4 v, hf_sd
   const hf_float4 a = hf_make_float4(m[0] * gx + m[3] * gy + m[6] * gz, m[1] * gx + m[4] * gy + m[7] * gz,
                                      m[2] * gx + m[5] * gy + m[8] * gz, 0.0f);
   if (!(hf_isfinite(a.x) && hf_isfinite(a.y) && hf_isfinite(a.z))) return 0;
-  hf_reg_set_row(v, a, r, hf_reg_term_weight(p.robust, r), row);
+  // The depth noise (SdfOptions::depth_noise_ref_m): z is the vertex's depth in the reference camera, which the
+  // motion between two frames leaves within millimetres of its measured depth. s = 1 when off: the same bits.
+  const float sc = hf_reg_depth_noise_scale(p.depth_noise_ref_m, v.z);
+  hf_reg_set_row(v, a, r, sc * sc * hf_reg_term_weight(p.robust, sc * r), row);
   return 1;
 }
 

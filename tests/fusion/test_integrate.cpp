@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -9,6 +10,7 @@
 
 #include "datasets/presets.h"
 #include "datasets/synthetic_sequence.h"
+#include "fusion/deintegrate.h"
 #include "fusion/kernels/integrate_kernels.h"
 #include "fusion/volume_io.h"
 #include "tests/common/analytic_depth.h"
@@ -419,6 +421,105 @@ TEST(Integrate, KernelRejectsBehindSurfaceAndUpdatesFreeSpace) {
   EXPECT_EQ(hf_integrate_voxel(&v, hf_make_float4(0, 0, 1.02f, 1), depth, nullptr, nullptr, K, mu, 100.0f, 1.0f), 1);
   EXPECT_NEAR(hf_voxel_sdf(v), (1.0f - 0.5f) / 2, 1e-4f);
   EXPECT_EQ(hf_voxel_weight(v), 2.0f);
+}
+
+// Depth-dependent truncation (IntegrateParams::truncation_depth_ref_m): a fronto-parallel plane at depth z, so the
+// projective distance is the true one. The band is mu_z = mu min(1, max(f, (z / ref)^2)); every observed voxel holds
+// clamp(sdf, -mu_z, mu_z) / mu (the values stay in units of mu), none more than mu_z behind the plane is observed,
+// and with the option off the same frame gives exactly today's field. Planes at 0.8 m and 1.6 m with ref 2 m and f
+// 0.25 give bands of 0.25 mu (the floor: (0.4)^2 = 0.16) and 0.64 mu.
+TEST(Integrate, DepthDependentTruncationFollowsTheFormula) {
+  EXPECT_EQ(hf_truncation_scale(0.0f, 0.5f, 3.0f), 1.0f);  // off
+  EXPECT_EQ(hf_truncation_scale(2.0f, 0.25f, 0.8f), 0.25f);
+  EXPECT_FLOAT_EQ(hf_truncation_scale(2.0f, 0.25f, 1.6f), 0.64f);
+  EXPECT_EQ(hf_truncation_scale(2.0f, 0.25f, 2.5f), 1.0f);
+  const PinholeCamera camera = small_camera();
+  const VolumeParams volume = integrate_params_1cm();
+  const double mu = volume.truncation_m();
+  for (const double plane_z : {0.8, 1.6}) {
+    IntegrateParams params;
+    params.truncation_depth_ref_m = 2.0f;
+    params.truncation_min_fraction = 0.25f;
+    const double s = std::min(1.0, std::max(0.25, (plane_z / 2.0) * (plane_z / 2.0)));
+    const DepthImage depth = render_plane_depth(camera, SE3::identity(), Eigen::Vector3d::UnitZ(), plane_z);
+    VoxelBlockGrid grid(volume), off(volume);
+    integrate(grid, depth, ColorImage(), camera, SE3::identity(), params);
+    integrate(off, depth, ColorImage(), camera, SE3::identity());
+    size_t checked = 0, clamped = 0, hidden_now = 0;
+    double max_err = 0.0;
+    for (const auto& [c, block] : off.blocks()) {
+      const VoxelBlock* b = grid.find(c);
+      ASSERT_NE(b, nullptr);  // the allocation band is mu either way
+      for (int z = 0; z < 8; ++z)
+        for (int y = 0; y < 8; ++y)
+          for (int x = 0; x < 8; ++x) {
+            const int i = hf_voxel_index(x, y, z);
+            const double sdf = plane_z - voxel_centre(volume, c, x, y, z).z();
+            const Voxel& v = b->voxels[i];
+            if (block->voxels[i].weight == 0) {
+              EXPECT_EQ(v.weight, 0);
+              continue;
+            }
+            if (sdf < -s * mu - 1e-4) {  // behind the narrower band: no longer observed
+              EXPECT_EQ(v.weight, 0) << sdf;
+              ++hidden_now;
+              continue;
+            }
+            if (std::abs(sdf + s * mu) < 1e-4) continue;  // on the band's edge: either side is right
+            ASSERT_NE(v.weight, 0) << sdf;
+            const double expected = std::clamp(sdf, -s * mu, s * mu) / mu;
+            clamped += std::abs(sdf) > s * mu;
+            max_err = std::max(max_err, std::abs(hf_voxel_sdf(v) - expected));
+            ++checked;
+          }
+    }
+    EXPECT_GT(checked, 5000u);
+    EXPECT_GT(clamped, 1000u);
+    EXPECT_GT(hidden_now, 1000u);
+    // Bound as FrontoParallelPlaneGivesAnalyticSdf's: half an int16 step plus float depth and positions over mu.
+    EXPECT_LT(max_err, 0.5 / HF_SDF_SCALE + 2e-5) << "plane at " << plane_z;
+  }
+}
+
+// Observation weight by depth (IntegrateParams::weight_depth_ref_m): a fronto-parallel plane at depth d fused twice
+// gives every observed voxel the weight 2 min(1, max(1/8, (ref / d)^2)) (exact in the 1/16 steps the weight is
+// stored in for these d) and the same value as unweighted fusion; deintegrating one frame leaves one observation.
+TEST(Integrate, DepthWeightFollowsTheFormula) {
+  EXPECT_EQ(hf_weight_scale(0.0f, 3.0f), 1.0f);  // off
+  EXPECT_EQ(hf_weight_scale(1.5f, 1.0f), 1.0f);
+  EXPECT_EQ(hf_weight_scale(1.5f, 3.0f), 0.25f);
+  EXPECT_EQ(hf_weight_scale(1.0f, 4.0f), 0.125f);  // (1/4)^2 = 1/16, floored
+  const PinholeCamera camera = small_camera();
+  const VolumeParams volume = integrate_params_1cm();
+  for (const double plane_z : {1.0, 3.0}) {
+    IntegrateParams params;
+    params.weight_depth_ref_m = 1.5f;
+    const float expected_w = 2.0f * hf_weight_scale(1.5f, float(plane_z));
+    const DepthImage depth = render_plane_depth(camera, SE3::identity(), Eigen::Vector3d::UnitZ(), plane_z);
+    VoxelBlockGrid grid(volume), off(volume);
+    for (int i = 0; i < 2; ++i) {
+      integrate(grid, depth, ColorImage(), camera, SE3::identity(), params);
+      integrate(off, depth, ColorImage(), camera, SE3::identity());
+    }
+    size_t checked = 0;
+    for (const auto& [c, block] : off.blocks()) {
+      const VoxelBlock* b = grid.find(c);
+      ASSERT_NE(b, nullptr);
+      for (size_t i = 0; i < block->voxels.size(); ++i) {
+        if (block->voxels[i].weight == 0) continue;
+        ASSERT_EQ(hf_voxel_weight(b->voxels[i]), expected_w) << plane_z;
+        ASSERT_EQ(b->voxels[i].sdf, block->voxels[i].sdf);
+        ++checked;
+      }
+    }
+    EXPECT_GT(checked, 5000u);
+    deintegrate(grid, depth, ColorImage(), camera, SE3::identity(), params);
+    for (const auto& [c, block] : grid.blocks())
+      for (const Voxel& v : block->voxels)
+        if (v.weight != 0) {
+          ASSERT_EQ(hf_voxel_weight(v), expected_w / 2) << plane_z;
+        }
+  }
 }
 
 TEST(Integrate, ErrorsAndDeterminism) {

@@ -3,6 +3,8 @@
 // cases are tested with every other method by the registry's tests: test_accuracy.cpp, test_hard_cases.cpp.)
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "core/error.h"
@@ -11,6 +13,7 @@
 #include "fusion/integrate.h"
 #include "fusion/voxel_block_grid.h"
 #include "reg_test_util.h"
+#include "registration/dense_method.h"
 #include "registration/gauss_newton.h"
 #include "registration/kernels/sdf_kernel.h"
 
@@ -137,6 +140,45 @@ TEST(SdfRegistration, TheFlatMapGivesTheHostGridsRows) {
       ungated_rows = rows;
     } else {
       EXPECT_LT(rows, ungated_rows);
+    }
+  }
+}
+
+
+// The depth-noise weighting (SdfOptions::depth_noise_ref_m) on one cell of a field that rises along z: a row at depth
+// z beyond ref keeps its Jacobian and residual and takes the weight s^2 w(s r), s = (ref / z)^2, w the robust
+// kernel; at or nearer than ref the row is bit for bit the unweighted one. Distances 8 mm (inside Huber's 1 cm, so
+// the weight is s^2 alone) and 30 mm (Huber 1/3 unweighted, 1 once scaled by s = 1/4).
+TEST(SdfRegistration, DepthNoiseWeightScalesRowsAsRefOverZSquared) {
+  hf_sdf_params p{};
+  p.T_world_ref = to_transform12(SE3());
+  p.inv_voxel_m = 100.0f;
+  p.mu_m = 0.04f;
+  p.max_abs_sdf = 0.9f;
+  p.robust = robust_params(RobustKernel::huber, 0.01f, 0.01f, 5.0f);
+  const float frac[3] = {0.5f, 0.5f, 0.5f};
+  for (const float d_mid : {0.2f, 0.75f}) {
+    float raw[8];  // corner c = x + 2 y + 4 z: d_mid -+ 0.1 on the near and far faces
+    for (int c = 0; c < 8; ++c) raw[c] = std::round((d_mid + ((c >> 2) ? 0.1f : -0.1f)) * HF_SDF_SCALE);
+    for (const float z : {1.0f, 1.5f, 3.0f}) {
+      const hf_float4 v = hf_make_float4(0.01f, -0.02f, z, 1.0f);
+      hf_reg_row off{}, on{};
+      p.depth_noise_ref_m = 0.0f;
+      ASSERT_EQ(hf_sdf_row(raw, frac, v, p, &off), 1);
+      p.depth_noise_ref_m = 1.5f;
+      ASSERT_EQ(hf_sdf_row(raw, frac, v, p, &on), 1);
+      EXPECT_NEAR(off.r, d_mid * 0.04f, 1e-5f);
+      if (z <= 1.5f) {
+        EXPECT_EQ(std::memcmp(&off, &on, sizeof off), 0) << z;
+        continue;
+      }
+      const float s = (1.5f / z) * (1.5f / z);
+      EXPECT_EQ(std::memcmp(off.J, on.J, sizeof off.J), 0);
+      EXPECT_EQ(off.r, on.r);
+      const float huber_off = std::min(1.0f, 0.01f / std::abs(off.r));
+      const float huber_on = std::min(1.0f, 0.01f / std::abs(s * off.r));
+      EXPECT_NEAR(off.w, huber_off, 1e-6f);
+      EXPECT_NEAR(on.w, s * s * huber_on, 1e-7f) << "d " << d_mid << " z " << z;
     }
   }
 }

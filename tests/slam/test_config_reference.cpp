@@ -73,6 +73,27 @@ TEST(ConfigReference, ParserRefusesNumbersOutsideTheRowsRange) {
             0.02);
 }
 
+// depth_only_registration_options: the hand-over method's own keys, over the pipeline's options of that method;
+// absent from the defaults' JSON (written only when set), a key the method does not have refused, and read back
+// from a report's JSON.
+TEST(ConfigReference, DepthOnlyRegistrationOptionsAreTheHandOversKeys) {
+  EXPECT_FALSE(config_to_json(PipelineConfig{}).contains("depth_only_registration_options"));
+  const PipelineConfig c = parse_config(R"({"depth_only_registration_options": {"depth_noise_ref_m": 1.5}})", "c.json");
+  ASSERT_TRUE(c.depth_only_registration_options.has_value());
+  const nlohmann::json j = config_to_json(c);
+  EXPECT_EQ(j["depth_only_registration_options"]["depth_noise_ref_m"].get<double>(), 1.5);
+  EXPECT_EQ(j["depth_only_registration_options"]["max_abs_sdf"].dump(), "0.9");  // sdf's, the default hand-over
+  const PipelineConfig back = config_from_json(j, "report.json");
+  ASSERT_TRUE(back.depth_only_registration_options.has_value());
+  EXPECT_EQ(config_to_json(back)["depth_only_registration_options"], j["depth_only_registration_options"]);
+  EXPECT_THROW(parse_config(R"({"depth_only_registration_options": {"rgb_weight_typo": 1}})", "c.json"), Error);
+  // icp as the hand-over: its keys, not sdf's
+  EXPECT_THROW(parse_config(R"({"colour_check": {"depth_only_registration": "icp"},
+                               "depth_only_registration_options": {"max_abs_sdf": 0.5}})", "c.json"), Error);
+  EXPECT_NO_THROW(parse_config(R"({"colour_check": {"depth_only_registration": "icp"},
+                                  "depth_only_registration_options": {"max_dist_m": 0.05}})", "c.json"));
+}
+
 TEST(ConfigReference, FloatsAreWrittenAsTyped) {
   const nlohmann::json j = config_to_json(PipelineConfig{});
   // float fields: 0.1f, not 0.10000000149011612; and back to the same float
