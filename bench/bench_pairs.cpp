@@ -1,17 +1,22 @@
 // Large inter-frame motion (issue 34): every pair (i, i + k), k = 1..max_k, of a real sequence registered from the
 // identity, against the ground-truth relative pose. Success = within 3 cm and 2 degrees of it (and a usable
 // status). Two ways of running each method, both counted:
-//   pipeline  the pipeline's registration settings: pyramid from level 1 (320x240 of 640x480), its levels and
-//             iterations, slam::pipeline_registration_options (combined's rgb_weight 0.4), frame to frame;
-//   align     align()'s defaults: pyramid of 3 levels from full resolution, the method's default options (what
+//   pipeline  the pipeline's registration settings: pyramid from level 1 (320x240 of 640x480),
+//             slam::pipeline_registration_options (combined's rgb_weight 0.4; 3 levels, no rotation-first step);
+//   align     align()'s defaults: the method's registry options (default_registration_options) on a pyramid from
+//             full resolution with as many levels as their iterations list (what
 //             hashfusion.make_registration(name).align(cur, ref, camera) does).
-// Variants widen the basin: "+so3" (rotation-first, registration/so3_prealign.h, iterations 10/5 on the two
-// coarsest levels), "+L4" (a fourth, coarser pyramid level with 4 iterations).
+// Variants: "default" = the mode's options as they are; the others set the depth and the rotation-first step
+// explicitly over them: "base" = 3 levels, no rotation-first step (both modes' settings before issue 34's
+// large-motion work), "+so3" = rotation-first (registration/so3_prealign.h, iterations 10/5 on the two coarsest
+// levels used), "+L4" / "+L5" = a fourth (and fifth) coarser pyramid level with 4 iterations each.
 //
 //   build/release/bench/bench_pairs --input DIR --out FILE.json [--max-k 10] [--methods combined,icp]
-//                                   [--variants base,so3,L4,so3+L4] [--modes pipeline,align] [--stride 1]
+//                                   [--variants default,base,so3+L4] [--modes pipeline,align] [--stride 1]
+//                                   [--camera C] [--frames-only 1]
 // Frames of a distorted camera (fr1 with --camera fr1) are undistorted first, as the pipeline does. Writes one
 // JSON record per (method, mode, variant, i, k) and prints a summary; bench/pairs_report.py makes the tables.
+// --frames-only 1 writes the frame list alone (for bench/pairs_open3d.py) without registering anything.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -41,15 +46,29 @@ std::vector<std::string> split_list(const std::string& s) {
 
 struct PairsFrame {
   hf::RgbdFrame frame;
-  hf::FramePyramid pipeline_pyramid, align_pyramid, pipeline_pyramid4, align_pyramid4;
+  // Built once with the most levels any run asks for: a pyramid's levels do not depend on how many follow, and
+  // the driver uses min(iterations, levels) of them.
+  hf::FramePyramid pipeline_pyramid, align_pyramid;
 };
+
+// The options of `variant` over the mode's own (see the header comment).
+hf::RegistrationOptions variant_options(hf::RegistrationOptions o, const std::string& variant) {
+  if (variant == "default") return o;
+  const int levels = variant.find("L5") != std::string::npos ? 5 : variant.find("L4") != std::string::npos ? 4 : 3;
+  o.driver.iterations = {10, 5, 4};
+  while (int(o.driver.iterations.size()) < levels) o.driver.iterations.push_back(4);
+  o.driver.so3_iterations.clear();
+  if (variant.find("so3") != std::string::npos) o.driver.so3_iterations = {10, 5};
+  return o;
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string input, out_path, camera;
   int max_k = 10, stride = 1;
-  std::vector<std::string> methods = {"combined", "icp"}, variants = {"base", "so3", "L4", "so3+L4"},
+  bool frames_only = false;
+  std::vector<std::string> methods = {"combined", "icp"}, variants = {"default", "base"},
                            modes = {"pipeline", "align"};
   for (int a = 1; a + 1 < argc; a += 2) {
     const std::string key = argv[a], value = argv[a + 1];
@@ -61,11 +80,13 @@ int main(int argc, char** argv) {
     else if (key == "--methods") methods = split_list(value);
     else if (key == "--variants") variants = split_list(value);
     else if (key == "--modes") modes = split_list(value);
+    else if (key == "--frames-only") frames_only = value != "0";
     else { std::cerr << "bench_pairs: unknown option " << key << "\n"; return 1; }
   }
   if (input.empty() || out_path.empty()) {
     std::cerr << "usage: bench_pairs --input DIR --out FILE.json [--camera C] [--max-k 10] [--methods a,b] "
-                 "[--variants base,so3,L4,so3+L4] [--modes pipeline,align] [--stride 1]\n";
+                 "[--variants default,base,so3,L4,so3+L4,so3+L5] [--modes pipeline,align] [--stride 1] "
+                 "[--frames-only 1]\n";
     return 1;
   }
   try {
@@ -75,6 +96,25 @@ int main(int argc, char** argv) {
     const hf::PinholeCamera cam = source->camera().pinhole();
     std::optional<hf::Undistorter> undistort;
     if (!source->camera().distortion.none()) undistort.emplace(source->camera());
+    // The options of every run, and the levels their pyramids need.
+    struct Run {
+      std::string method, mode, variant;
+      hf::RegistrationOptions options;
+    };
+    std::vector<Run> runs;
+    int pipeline_levels = 0, align_levels = 0;
+    if (!frames_only)
+      for (const std::string& method : methods)
+        for (const std::string& mode : modes)
+          for (const std::string& variant : variants) {
+            if (mode != "pipeline" && mode != "align") throw hf::Error("unknown mode " + mode);
+            hf::RegistrationOptions o = variant_options(mode == "pipeline" ? hf::slam::pipeline_registration_options(method)
+                                                                           : hf::default_registration_options(method),
+                                                        variant);
+            int& levels = mode == "pipeline" ? pipeline_levels : align_levels;
+            levels = std::max(levels, int(o.driver.iterations.size()));
+            runs.push_back({method, mode, variant, std::move(o)});
+          }
     std::vector<PairsFrame> frames;
     for (hf::FrameRead r = source->next(); r.status != hf::FrameStatus::end; r = source->next()) {
       if (r.status != hf::FrameStatus::ok || !r.frame.T_world_camera_gt) continue;
@@ -84,29 +124,26 @@ int main(int argc, char** argv) {
         f.frame.depth = undistort->depth(f.frame.depth);
         f.frame.color = undistort->color(f.frame.color);
       }
-      hf::FramePyramidOptions pp;  // the pipeline's: slam::PipelineConfig{}.pyramid from its tracking level
-      pp.first_level = hf::slam::PipelineConfig{}.tracking_level;
-      f.pipeline_pyramid = hf::build_frame_pyramid(f.frame.depth, &f.frame.color, cam, pp);
-      f.align_pyramid = hf::build_frame_pyramid(f.frame.depth, &f.frame.color, cam, {});
-      pp.levels = 4;
-      hf::FramePyramidOptions ap;
-      ap.levels = 4;
-      f.pipeline_pyramid4 = hf::build_frame_pyramid(f.frame.depth, &f.frame.color, cam, pp);
-      f.align_pyramid4 = hf::build_frame_pyramid(f.frame.depth, &f.frame.color, cam, ap);
+      if (pipeline_levels > 0) {
+        hf::FramePyramidOptions pp = hf::slam::PipelineConfig{}.pyramid;  // the pipeline's, from its tracking level
+        pp.first_level = hf::slam::PipelineConfig{}.tracking_level;
+        pp.levels = pipeline_levels;
+        f.pipeline_pyramid = hf::build_frame_pyramid(f.frame.depth, &f.frame.color, cam, pp);
+      }
+      if (align_levels > 0) {
+        hf::FramePyramidOptions ap;  // align()'s: the defaults from full resolution
+        ap.levels = align_levels;
+        f.align_pyramid = hf::build_frame_pyramid(f.frame.depth, &f.frame.color, cam, ap);
+      }
+      if (frames_only) f.frame.depth = {}, f.frame.color = {};
       frames.push_back(std::move(f));
     }
     std::cerr << "bench_pairs: " << frames.size() << " frames of " << input << " (" << source->camera_origin()
               << ")\n";
     nlohmann::json records = nlohmann::json::array();
-    for (const std::string& method : methods)
-      for (const std::string& mode : modes)
-        for (const std::string& variant : variants) {
-          hf::RegistrationOptions o = mode == "pipeline" ? hf::slam::pipeline_registration_options(method)
-                                                         : hf::default_registration_options(method);
-          const bool four = variant.find("L4") != std::string::npos;
-          if (four) o.driver.iterations.push_back(4);
-          if (variant.find("so3") != std::string::npos) o.driver.so3_iterations = {10, 5};
-          auto reg = hf::make_registration(method, o, hf::make_backend("cpu"));
+    for (const Run& run : runs) {
+          const std::string &method = run.method, &mode = run.mode, &variant = run.variant;
+          auto reg = hf::make_registration(method, run.options, hf::make_backend("cpu"));
           std::vector<int> ok_per_k(size_t(max_k + 1), 0), n_per_k(size_t(max_k + 1), 0);
           double ms_total = 0.0;
           long n_total = 0;
@@ -114,10 +151,8 @@ int main(int argc, char** argv) {
             for (size_t i = 0; i + size_t(k) < frames.size(); i += size_t(stride)) {
               const PairsFrame& ref = frames[i];
               const PairsFrame& cur = frames[i + size_t(k)];
-              const hf::FramePyramid& cp = mode == "pipeline" ? (four ? cur.pipeline_pyramid4 : cur.pipeline_pyramid)
-                                                               : (four ? cur.align_pyramid4 : cur.align_pyramid);
-              const hf::FramePyramid& rp = mode == "pipeline" ? (four ? ref.pipeline_pyramid4 : ref.pipeline_pyramid)
-                                                               : (four ? ref.align_pyramid4 : ref.align_pyramid);
+              const hf::FramePyramid& cp = mode == "pipeline" ? cur.pipeline_pyramid : cur.align_pyramid;
+              const hf::FramePyramid& rp = mode == "pipeline" ? ref.pipeline_pyramid : ref.align_pyramid;
               const auto t0 = std::chrono::steady_clock::now();
               const hf::RegistrationResult res = reg->align(cp, rp, hf::SE3());
               const double ms =
@@ -140,7 +175,7 @@ int main(int argc, char** argv) {
             std::cerr << " k" << k << "="
                       << (n_per_k[size_t(k)] ? 100.0 * ok_per_k[size_t(k)] / n_per_k[size_t(k)] : 0.0) << "%";
           std::cerr << "  " << (n_total ? ms_total / double(n_total) : 0.0) << " ms/pair\n";
-        }
+    }
     nlohmann::json frame_list = nlohmann::json::array();  // for a peer (bench/pairs_open3d.py) on the same pairs
     for (const PairsFrame& f : frames) {
       const Eigen::Matrix4d T = f.frame.T_world_camera_gt->matrix();

@@ -212,8 +212,16 @@ class CombinedMethod final : public DenseMethod {
   }
 };
 
+// align()'s defaults widen the basin for a pair without a motion prior (issue 34: 12 degrees and 10 cm between
+// frames): two coarser levels (5 from 640x480, the coarsest 40x30) and the rotation-first step on the two coarsest.
+// Chosen on TUM fr1/rpy 0-149 pairs, reported on 150-269 (bench/results/accuracy/large_motion.md, "align()'s
+// defaults"). The pipeline tracks from a motion prior at its own depth without them
+// (slam::pipeline_registration_options).
 RegistrationOptions combined_defaults() {
-  return RegistrationOptions(GaussNewtonOptions{}, std::make_unique<CombinedOptions>());
+  GaussNewtonOptions driver;
+  driver.iterations = {10, 5, 4, 4, 4};
+  driver.so3_iterations = {10, 5};
+  return RegistrationOptions(driver, std::make_unique<CombinedOptions>());
 }
 
 std::unique_ptr<Registration> make_combined(const RegistrationOptions& options, std::unique_ptr<ReductionBackend> backend) {

@@ -281,6 +281,12 @@ nlohmann::json migrate_registration_options(const nlohmann::json& j, const Regis
 RegistrationOptions pipeline_registration_options(const std::string& method) {
   RegistrationOptions o = default_registration_options(method);
   o.set("rgb_weight", kPipelineRgbWeight);  // methods without photometric rows have no such knob
+  // A registry default's wide basin for guess-free pairs (combined: rotation-first, 5 levels) is not the
+  // pipeline's: it tracks from a motion prior, where they cost time and no accuracy (bench/results/accuracy/
+  // large_motion.md), at the depth of its own pyramid.
+  o.driver.so3_iterations.clear();
+  const size_t levels = size_t(PipelineConfig{}.pyramid.levels);
+  if (o.driver.iterations.size() > levels) o.driver.iterations.resize(levels);
   return o;
 }
 

@@ -140,7 +140,9 @@ PipelineConfig parse_config(const std::string& text, const std::string& name);
 // smoother geometry shifts the balance towards the photometric rows.
 inline constexpr double kPipelineRgbWeight = 0.4;
 
-// A method's options as the pipeline runs it: its defaults, with rgb_weight = kPipelineRgbWeight where it has one.
+// A method's options as the pipeline runs it: its defaults, with rgb_weight = kPipelineRgbWeight where it has one,
+// without the registry's wide-basin settings for guess-free pairs (no rotation-first step, at most the default
+// pyramid's levels: the pipeline tracks from a motion prior; bench/results/accuracy/large_motion.md).
 RegistrationOptions pipeline_registration_options(const std::string& method);
 // A registry method's options from a JSON object of its keys (as report.json's "registration_options"): the
 // method's registry defaults (default_registration_options, not the pipeline's) overridden by the keys present,

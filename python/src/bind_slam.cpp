@@ -373,10 +373,11 @@ void bind_registration(py::module_& m) {
       .def_property_readonly("name", [](const Registration& r) { return r.registration->name(); })
       .def("align",
            [](Registration& r, const RgbdFrame& current, const RgbdFrame& reference, const PinholeCamera& camera,
-              const py::object& guess, int levels) {
+              const py::object& guess, const py::object& levels) {
              const SE3 T_guess = guess.is_none() ? SE3() : se3_from_array(guess, "T_ref_cur_initial");
              FramePyramidOptions o;
-             o.levels = levels;
+             // By default as many levels as the method's iterations use (combined's defaults: 5).
+             o.levels = levels.is_none() ? int(r.registration->options().driver.iterations.size()) : levels.cast<int>();
              return unlocked(r.mutex, [&] {
                const FramePyramid cur = build_frame_pyramid(current.depth, &current.color, camera, o);
                const FramePyramid ref = build_frame_pyramid(reference.depth, &reference.color, camera, o);
@@ -384,7 +385,9 @@ void bind_registration(py::module_& m) {
              });
            },
            py::arg("current"), py::arg("reference"), py::arg("camera"), py::arg("T_ref_cur_initial") = py::none(),
-           py::arg("levels") = 3, "T_ref_cur maps current-camera points into the reference camera");
+           py::arg("levels") = py::none(),
+           "T_ref_cur maps current-camera points into the reference camera; levels: the pyramid's, by default as "
+           "many as the method's iterations list");
   m.def("make_registration",
         [](const std::string& name, const py::object& options, const std::string& backend) {
           auto r = std::make_unique<Registration>();
