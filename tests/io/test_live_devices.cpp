@@ -185,11 +185,14 @@ TEST(OpenNi2Capture, OniRecordingRoundTripsThroughTheFileDriver) {
       ASSERT_EQ(depth.readFrame(&f), ni::STATUS_OK);
       live_depth_row0[f.getTimestamp()] = static_cast<const std::uint16_t*>(f.getData())[5] * 0.001f;
     }
-    recorder.stop();
-    recorder.destroy();
+    // Streams first, then the recorder: the Dummy's frame thread holds a stream's lock while it hands the frame to
+    // the attached recorder, which takes the recorder's; stopping the recorder first takes them the other way round
+    // and deadlocked libOpenNI2 (seen once in a CI-sized run, 2026-12-07: both threads waiting on each other).
     depth.stop();
     color.stop();
     std::this_thread::sleep_for(std::chrono::milliseconds(70));  // the Dummy's threads poll their stop flag
+    recorder.stop();
+    recorder.destroy();
     depth.destroy();
     color.destroy();
     device.close();
