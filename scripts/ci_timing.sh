@@ -81,7 +81,7 @@ total=$((SECONDS - total_start))
     echo
     echo "| seconds | step |"
     echo "|---|---|"
-    awk 'NR > 1 {printf "%.1f %s\n", ($2 - $1) / 1000, $4}' "$dir/.ninja_log" | sort -rn | head -20 |
+    awk 'NR > 1 {printf "%.1f %s\n", ($2 - $1) / 1000, $4}' "$dir/.ninja_log" | sort -rn | sed -n '1,20p' |
       awk '{printf "| %s | `%s` |\n", $1, $2}'
     cost="$dir/Testing/Temporary/CTestCostData.txt"
     log="$clone/ci_timing_suite_$preset.log"  # this preset's part of test.sh's log
@@ -109,7 +109,7 @@ total=$((SECONDS - total_start))
       echo
       echo "| seconds | test ($preset, 20 slowest) |"
       echo "|---|---|"
-      awk '/^---/ {exit} NF == 3 {printf "%.1f %s\n", $3, $1}' "$cost" | sort -rn | head -20 |
+      awk '/^---/ {exit} NF == 3 {printf "%.1f %s\n", $3, $1}' "$cost" | sort -rn | sed -n '1,20p' |
         awk '{printf "| %s | %s |\n", $1, $2}'
     fi
   done
