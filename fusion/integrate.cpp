@@ -249,29 +249,24 @@ void update_blocks(VoxelUpdate op, const VolumeParams& volume,
     stats->incidence_ms = ms_since(t_inc);
   }
 
-  // Per-pixel truncation scale (hf_truncation_scale) when the band follows the depth noise.
-  std::vector<float> mu_scale;
-  if (params.truncation_depth_ref_m > 0.0f) {
+  // Per-pixel factors of the depth (empty when off): the truncation band following the depth noise
+  // (hf_truncation_scale) and the observation weight of far pixels (hf_weight_scale).
+  auto per_pixel = [&](auto&& factor) {
     const int W = depth.width();
-    mu_scale.resize(size_t(W) * depth.height());
+    std::vector<float> out(size_t(W) * depth.height());
     parallel_for_rows(depth.height(), [&](int v) {
       const size_t row = size_t(v) * W;
-      for (int u = 0; u < W; ++u)
-        mu_scale[row + u] =
-            hf_truncation_scale(params.truncation_depth_ref_m, params.truncation_min_fraction, depth_px[row + u]);
+      for (int u = 0; u < W; ++u) out[row + u] = factor(depth_px[row + u]);
     });
-  }
-
-  // Per-pixel factor of the observation weight (hf_weight_scale) when far observations count less.
-  std::vector<float> w_scale;
-  if (params.weight_depth_ref_m > 0.0f) {
-    const int W = depth.width();
-    w_scale.resize(size_t(W) * depth.height());
-    parallel_for_rows(depth.height(), [&](int v) {
-      const size_t row = size_t(v) * W;
-      for (int u = 0; u < W; ++u) w_scale[row + u] = hf_weight_scale(params.weight_depth_ref_m, depth_px[row + u]);
+    return out;
+  };
+  std::vector<float> mu_scale, w_scale;
+  if (params.truncation_depth_ref_m > 0.0f)
+    mu_scale = per_pixel([&](float z) {
+      return hf_truncation_scale(params.truncation_depth_ref_m, params.truncation_min_fraction, z);
     });
-  }
+  if (params.weight_depth_ref_m > 0.0f)
+    w_scale = per_pixel([&](float z) { return hf_weight_scale(params.weight_depth_ref_m, z); });
 
   FrameInputs frame;
   frame.depth = depth_px;

@@ -121,17 +121,19 @@ Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
   if (int(iterations.size()) > config_.pyramid.levels) iterations.resize(size_t(config_.pyramid.levels));
   config_.registration_options = options;
   registration_ = make_registration(config_.registration, options, make_backend(config_.backend));
+  // Every method the pipeline runs starts from the pipeline's settings (pipeline_registration_options), never from
+  // a registry default meant for guess-free pairs (combined's rotation-first step and five levels).
   if (!config_.fallback_registration.empty() && config_.fallback_registration != config_.registration) {
-    RegistrationOptions fo = default_registration_options(config_.fallback_registration);
+    RegistrationOptions fo = pipeline_registration_options(config_.fallback_registration);
     fo.driver.iterations = iterations;
     fallback_ = make_registration(config_.fallback_registration, fo, make_backend(config_.backend));
   }
   if (!config_.seed_registration.empty()) {
-    RegistrationOptions so = default_registration_options(config_.seed_registration);
+    RegistrationOptions so = pipeline_registration_options(config_.seed_registration);
     seed_ = make_registration(config_.seed_registration, so, make_backend(config_.backend));
   }
   if (!config_.seed_on_failure.empty()) {
-    RegistrationOptions so = default_registration_options(config_.seed_on_failure);
+    RegistrationOptions so = pipeline_registration_options(config_.seed_on_failure);
     failure_seed_ = make_registration(config_.seed_on_failure, so, make_backend(config_.backend));
   }
   if (config_.relocalisation.enabled)
