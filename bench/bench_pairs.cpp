@@ -1,8 +1,11 @@
 // Large inter-frame motion (issue 34): every pair (i, i + k), k = 1..max_k, of a real sequence registered from the
 // identity, against the ground-truth relative pose. Success = within 3 cm and 2 degrees of it (and a usable
 // status). Two ways of running each method, both counted:
-//   pipeline  the pipeline's registration settings: pyramid from level 1 (320x240 of 640x480),
-//             slam::pipeline_registration_options (combined's rgb_weight 0.4; 3 levels, no rotation-first step);
+//   pipeline  the pipeline's registration settings from the identity: pyramid from level 1 (320x240 of 640x480),
+//             slam::pipeline_wide_basin_options(slam::pipeline_registration_options) (combined's rgb_weight 0.4;
+//             4 levels and the rotation-first step: what the pipeline runs where it has no motion prior, i.e. its
+//             guess is the identity; variant "prior" = its settings where it tracks from a motion prior: 3 levels,
+//             no rotation-first step);
 //   align     align()'s defaults: the method's registry options (default_registration_options) on a pyramid from
 //             full resolution with as many levels as their iterations list (what
 //             hashfusion.make_registration(name).align(cur, ref, camera) does).
@@ -53,7 +56,7 @@ struct PairsFrame {
 
 // The options of `variant` over the mode's own (see the header comment).
 hf::RegistrationOptions variant_options(hf::RegistrationOptions o, const std::string& variant) {
-  if (variant == "default") return o;
+  if (variant == "default" || variant == "prior") return o;
   const int levels = variant.find("L5") != std::string::npos ? 5 : variant.find("L4") != std::string::npos ? 4 : 3;
   o.driver.iterations = {10, 5, 4};
   while (int(o.driver.iterations.size()) < levels) o.driver.iterations.push_back(4);
@@ -85,7 +88,7 @@ int main(int argc, char** argv) {
   }
   if (input.empty() || out_path.empty()) {
     std::cerr << "usage: bench_pairs --input DIR --out FILE.json [--camera C] [--max-k 10] [--methods a,b] "
-                 "[--variants default,base,so3,L4,so3+L4,so3+L5] [--modes pipeline,align] [--stride 1] "
+                 "[--variants default,prior,base,so3,L4,so3+L4,so3+L5] [--modes pipeline,align] [--stride 1] "
                  "[--frames-only 1]\n";
     return 1;
   }
@@ -108,9 +111,12 @@ int main(int argc, char** argv) {
         for (const std::string& mode : modes)
           for (const std::string& variant : variants) {
             if (mode != "pipeline" && mode != "align") throw hf::Error("unknown mode " + mode);
-            hf::RegistrationOptions o = variant_options(mode == "pipeline" ? hf::slam::pipeline_registration_options(method)
-                                                                           : hf::default_registration_options(method),
-                                                        variant);
+            hf::RegistrationOptions mode_options = hf::default_registration_options(method);
+            if (mode == "pipeline") {
+              mode_options = hf::slam::pipeline_registration_options(method);
+              if (variant == "default") mode_options = hf::slam::pipeline_wide_basin_options(mode_options);
+            }
+            hf::RegistrationOptions o = variant_options(mode_options, variant);
             int& levels = mode == "pipeline" ? pipeline_levels : align_levels;
             levels = std::max(levels, int(o.driver.iterations.size()));
             runs.push_back({method, mode, variant, std::move(o)});

@@ -8,7 +8,8 @@
 #           noise beyond REF m), sdfminw:W (sdf's voxels seen fewer than W times count as unobserved),
 #           trunc:REF:F (integrate.truncation_depth_ref_m REF, truncation_min_fraction F); several joined by
 #           + (e.g. sdfnoise:1.5+trunc:3:0.5), wdepth:REF (integrate.weight_depth_ref_m REF), sdfkey:KEY:VALUE (any
-#           key of the hand-over sdf, e.g. sdfkey:robust_sdf:student_t)
+#           key of the hand-over sdf, e.g. sdfkey:robust_sdf:student_t), key:KEY:VALUE (a top-level key of the
+#           configuration, e.g. key:wide_basin_without_prior:false)
 # e.g. HF_BIN=/tmp/hf bash scripts/bench_ate_levers.sh out/levers "rpy0_149 7s0_99" "off trunc:3:0.5"
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -36,6 +37,8 @@ for key in $inputs; do
         sdfminw) parts+=("{\"depth_only_registration_options\": {\"min_voxel_weight\": $a}}") ;;
         sdfkey) [[ "$b" =~ ^-?[0-9.]+$ ]] || b="\"$b\""  # a number as it is, else a string
                 parts+=("{\"depth_only_registration_options\": {\"$a\": $b}}") ;;
+        key) [[ "$b" =~ ^(-?[0-9.]+|true|false)$ ]] || b="\"$b\""
+             parts+=("{\"$a\": $b}") ;;
         wdepth) parts+=("{\"integrate\": {\"weight_depth_ref_m\": $a}}") ;;
         trunc) parts+=("{\"integrate\": {\"truncation_depth_ref_m\": $a, \"truncation_min_fraction\": $b}}") ;;
         *) echo "bench_ate_levers: unknown mode '$one'" >&2; exit 1 ;;
@@ -46,7 +49,8 @@ for key in $inputs; do
 c = {}
 for p in sys.argv[1:]:
     for k, v in json.loads(p).items():
-        c.setdefault(k, {}).update(v)
+        if isinstance(v, dict): c.setdefault(k, {}).update(v)
+        else: c[k] = v
 print(json.dumps(c))' "${parts[@]}" > "$work/c.json"
     bench_run "${key}__${mode//:/_}" "${input_dir[$key]}" --config "$work/c.json"
   done

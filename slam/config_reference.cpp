@@ -40,6 +40,8 @@ std::vector<ConfigKey> make_reference() {
       row("backend", "", any(), "where the normal equations are reduced: cpu | opencl"),
       row("tracking_level", "", closed(0, 2), "pyramid level tracking starts at: 0 full, 1 half, 2 quarter"),
       row("constant_velocity", "", any(), "guess each motion as the last one (false: identity, KinectFusion)"),
+      row("wide_basin_without_prior", "", any(),
+          "with no motion prior (after a loss): one more coarse level and the rotation-first step"),
       row("max_speed_m_per_s", "m/s", above(0), "a faster camera motion is a tracking failure"),
       row("max_angular_speed_deg_per_s", "deg/s", above(0), "the same for rotation"),
       row("max_degenerate_dims", "", closed(0, 6), "more unconstrained motion directions than this: lost"),

@@ -102,6 +102,16 @@ struct Pipeline::Verdict {
   std::string method, why;
 };
 
+// pipeline_wide_basin_options, without its extra level where that level would be narrower than 20 px (a
+// tracking resolution of 160x120 with 3 levels): too few pixels for the rotation fit and the dense solve.
+RegistrationOptions Pipeline::wide_basin_options(const RegistrationOptions& tracking) const {
+  RegistrationOptions wide = pipeline_wide_basin_options(tracking);
+  const int levels = int(wide.driver.iterations.size());
+  if (levels > config_.pyramid.levels && (tracking_camera_.width >> (levels - 1)) < 20)
+    wide.driver.iterations.resize(size_t(std::max(config_.pyramid.levels, int(tracking.driver.iterations.size()))));
+  return wide;
+}
+
 Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
     : config_(config), camera_(camera.pinhole()), tracking_camera_(camera.pinhole().scaled(config.tracking_level)),
       grid_((config.validate(), config.volume)),
@@ -121,6 +131,12 @@ Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
   if (int(iterations.size()) > config_.pyramid.levels) iterations.resize(size_t(config_.pyramid.levels));
   config_.registration_options = options;
   registration_ = make_registration(config_.registration, options, make_backend(config_.backend));
+  tracking_levels_ = config_.pyramid.levels;
+  if (config_.wide_basin_without_prior && config_.constant_velocity) {
+    const RegistrationOptions wide = wide_basin_options(options);
+    tracking_levels_ = std::max(tracking_levels_, int(wide.driver.iterations.size()));
+    wide_ = make_registration(config_.registration, wide, make_backend(config_.backend));
+  }
   // Every method the pipeline runs starts from the pipeline's settings (pipeline_registration_options), never from
   // a registry default meant for guess-free pairs (combined's rotation-first step and five levels).
   if (!config_.fallback_registration.empty() && config_.fallback_registration != config_.registration) {
@@ -231,7 +247,8 @@ FrameResult Pipeline::process_pinhole(const RgbdFrame& frame, FrameResult r) {
   check_colour(current, &r);  // before the raycast takes the frame's intensity for the next reference
   raycast_reference(current, v.T_world_cur, r.integrated, &r);
   // After a loss or a relocalisation the motion spans several frames: no prior for the next one, not a wrong one.
-  velocity_ = (lost_spell_ > 0 || v.state == TrackState::relocalised) ? SE3() : T_prev.inverse() * v.T_world_cur;
+  motion_prior_ = lost_spell_ == 0 && v.state != TrackState::relocalised;
+  velocity_ = motion_prior_ ? T_prev.inverse() * v.T_world_cur : SE3();
   T_world_cur_ = v.T_world_cur;
   last_time_s_ = frame.timestamp_s;
   lost_spell_ = 0;
@@ -266,6 +283,9 @@ void Pipeline::check_colour(const FramePyramid& current, FrameResult* r) {
                              : pipeline_registration_options(config_.colour_check.depth_only_registration);
   o.driver.iterations = registration_->options().driver.iterations;
   registration_ = make_registration(config_.colour_check.depth_only_registration, o, make_backend(config_.backend));
+  if (wide_)
+    wide_ = make_registration(config_.colour_check.depth_only_registration, wide_basin_options(o),
+                              make_backend(config_.backend));
   if (fallback_ && fallback_->name() == registration_->name()) fallback_.reset();
 }
 
@@ -273,6 +293,7 @@ FramePyramid Pipeline::preprocess(const RgbdFrame& frame, FrameResult* r) const 
   const auto t0 = std::chrono::steady_clock::now();
   FramePyramidOptions po = config_.pyramid;
   po.first_level = config_.tracking_level;
+  po.levels = tracking_levels_;
   FramePyramid p = frame_pyramid(device_pyramid_.get(), frame.depth, frame.color, camera_, po);
   r->ms.preprocess = r->ms.undistort + ms_since(t0);
   return p;
@@ -303,6 +324,7 @@ void Pipeline::initialise(const RgbdFrame& frame, FramePyramid& current, FrameRe
   T_world_cur_ = T0;
   last_time_s_ = frame.timestamp_s;
   velocity_ = SE3();
+  motion_prior_ = false;
   lost_spell_ = 0;
   keep_frame(frame, r);
   if (r->keyframe) query_loop_candidates(frame, r);
@@ -311,6 +333,8 @@ void Pipeline::initialise(const RgbdFrame& frame, FramePyramid& current, FrameRe
 Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_s, FrameResult* r) {
   const auto t0 = std::chrono::steady_clock::now();
   SE3 guess = config_.constant_velocity && lost_spell_ == 0 ? velocity_ : SE3();
+  // Without a measured motion the identity may be far from the truth: the wide basin (wide_basin_without_prior).
+  Registration* primary = wide_ && !(motion_prior_ && lost_spell_ == 0) ? wide_.get() : registration_.get();
   std::optional<RegistrationResult> seed;  // seed_registration's estimate on this frame
   bool seeded_guess = false;
   if (seed_) {  // a wide-baseline estimate replaces a motion prior it disagrees with (seed_registration)
@@ -320,20 +344,26 @@ Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_
                            d.angle_rad() * 180.0 / M_PI > config_.seed_min_motion_deg)) {
       guess = seed->T_ref_cur;
       seeded_guess = true;
+      primary = registration_.get();  // the seed's estimate is the prior
     }
   }
-  Verdict v = register_from(current, guess, timestamp_s, r);
-  // A guess that came from the seed already was the wide-baseline start: a retry would repeat it.
-  if (v.action != Verdict::integrate && failure_seed_ && !seeded_guess)
+  r->wide_basin = primary == wide_.get();
+  Verdict v = register_from(*primary, current, guess, timestamp_s, r);
+  // A guess that came from the seed already was the wide-baseline start: a retry would repeat it. Without a motion
+  // prior an accepted frame is checked against the seed too: from far, the wide basin can settle in a wrong
+  // minimum that the map's depth does not refute (a slide along a wall: synthetic room, 8 degrees and 20 cm from
+  // the identity, 9 cm off at five times the converged cost); the dense method from the seed's estimate replaces
+  // it where it fits the frame better.
+  if (failure_seed_ && !seeded_guess && (v.action != Verdict::integrate || r->wide_basin))
     v = retry_from_seed(current, guess, timestamp_s, std::move(v), seed, r);
   r->ms.track = ms_since(t0);
   return v;
 }
 
 // The primary from `guess`; where the map does not take its result, the fallback from the same guess.
-Pipeline::Verdict Pipeline::register_from(const FramePyramid& current, const SE3& guess, double timestamp_s,
-                                          FrameResult* r) {
-  const RegistrationResult primary_result = align_to_model(*registration_, current, guess);
+Pipeline::Verdict Pipeline::register_from(Registration& primary_method, const FramePyramid& current, const SE3& guess,
+                                          double timestamp_s, FrameResult* r) {
+  const RegistrationResult primary_result = align_to_model(primary_method, current, guess);
   r->term_disagreement = term_disagreement(primary_result);
   Verdict primary = decide(primary_result, current, timestamp_s, registration_->name());
   if (primary.action == Verdict::integrate || !fallback_) return primary;
@@ -361,21 +391,32 @@ Pipeline::Verdict Pipeline::retry_from_seed(const FramePyramid& current, const S
                                    ? *seed
                                    : align_to_model(*failure_seed_, current, guess);
   if (const std::optional<std::string> why = implausible(s, timestamp_s)) {
-    failed.why += "; " + failure_seed_->name() + " seed not plausible: " + *why;
+    if (failed.action != Verdict::integrate) failed.why += "; " + failure_seed_->name() + " seed not plausible: " + *why;
     return failed;
   }
   const TermDisagreement kept = r->term_disagreement;
-  Verdict retry = register_from(current, s.T_ref_cur, timestamp_s, r);
-  const bool better = retry.action == Verdict::integrate ||
-                      (retry.action == Verdict::odometry && failed.action == Verdict::lose);
+  Verdict retry = register_from(*registration_, current, s.T_ref_cur, timestamp_s, r);
+  // integrate over odometry over lose; between two integrated estimates (the cross-check of a frame without a
+  // motion prior) the one with the lower cost: the same method on the same frame and reference, so the costs compare.
+  const auto rank = [](const Verdict& x) {
+    return x.action == Verdict::integrate ? 2 : x.action == Verdict::odometry ? 1 : 0;
+  };
+  const bool better = rank(retry) > rank(failed) ||
+                      (rank(retry) == 2 && rank(failed) == 2 && retry.registration && failed.registration &&
+                       retry.registration->final_cost < failed.registration->final_cost);
   if (!better) {
     r->term_disagreement = kept;
-    failed.why += "; from the " + failure_seed_->name() + " seed: " + retry.why;
+    if (failed.action != Verdict::integrate) failed.why += "; from the " + failure_seed_->name() + " seed: " + retry.why;
     return failed;
   }
   r->placed_by_seed = true;
-  retry.why = "from the motion prior: " + failed.why + "; from the " + failure_seed_->name() + " seed: " +
-              (retry.why.empty() ? retry.method + " accepted" : retry.why);
+  if (failed.action == Verdict::integrate)
+    retry.why = "without a motion prior: the wide basin settled at cost " +
+                std::to_string(failed.registration->final_cost) + ", from the " + failure_seed_->name() +
+                " seed at " + std::to_string(retry.registration->final_cost);
+  else
+    retry.why = "from the motion prior: " + failed.why + "; from the " + failure_seed_->name() + " seed: " +
+                (retry.why.empty() ? retry.method + " accepted" : retry.why);
   return retry;
 }
 
@@ -772,7 +813,7 @@ void Pipeline::raycast_reference(FramePyramid& current, const SE3& T_world_cur, 
   }
   reference_->T_world_model = T_world_cur;
   reference_->pyramid =
-      model_pyramid(device_pyramid_.get(), reference_->model, tracking_camera_, config_.pyramid.levels);
+      model_pyramid(device_pyramid_.get(), reference_->model, tracking_camera_, tracking_levels_);
   take_intensity(current, &reference_->pyramid);
   reference_->valid = reference_->model.hit_count > 0;
   reference_->stale = false;
@@ -797,7 +838,7 @@ void Pipeline::ensure_reference_maps() {
   if (!reference_->stale) return;
   model_raycast(reference_->T_world_model, config_.raycast);
   reference_->pyramid =
-      model_pyramid(device_pyramid_.get(), reference_->model, tracking_camera_, config_.pyramid.levels);
+      model_pyramid(device_pyramid_.get(), reference_->model, tracking_camera_, tracking_levels_);
   take_intensity(reference_->frame_intensity, &reference_->pyramid);
   reference_->stale = false;
 }

@@ -157,10 +157,13 @@ struct FrameResult {
   std::string method;        // the registration that placed the frame (primary, fallback, or "relocalisation")
   std::optional<RegistrationResult> registration;  // the one that placed (or failed to place) the frame
   std::string message;       // why the frame was lost (one line), empty otherwise
-  // seed_on_failure ran on this frame (neither the primary nor the fallback placed it from the motion prior), and
-  // whether the retry from its estimate is what placed the frame.
+  // seed_on_failure ran on this frame (neither the primary nor the fallback placed it from the motion prior, or the
+  // frame had no motion prior and the seed cross-checked the wide basin), and whether the retry from its estimate
+  // is what placed the frame.
   bool seeded_on_failure = false;
   bool placed_by_seed = false;
+  // The frame had no motion prior and the primary ran with the wide basin (PipelineConfig::wide_basin_without_prior).
+  bool wide_basin = false;
   // The primary registration's two terms' disagreement (slam/colour_check.h); valid only when it has an icp and
   // a photometric term.
   TermDisagreement term_disagreement;
@@ -244,7 +247,9 @@ class Pipeline {
   FrameResult process_pinhole(const RgbdFrame& frame, FrameResult r);
   void initialise(const RgbdFrame& frame, FramePyramid& current, FrameResult* r);
   Verdict track(const FramePyramid& current, double timestamp_s, FrameResult* r);
-  Verdict register_from(const FramePyramid& current, const SE3& guess, double timestamp_s, FrameResult* r);
+  Verdict register_from(Registration& primary_method, const FramePyramid& current, const SE3& guess,
+                        double timestamp_s, FrameResult* r);
+  RegistrationOptions wide_basin_options(const RegistrationOptions& tracking) const;
   Verdict retry_from_seed(const FramePyramid& current, const SE3& guess, double timestamp_s, Verdict failed,
                           const std::optional<RegistrationResult>& seed, FrameResult* r);
   std::optional<std::string> implausible(const RegistrationResult& reg, double timestamp_s) const;
@@ -283,6 +288,8 @@ class Pipeline {
   std::unique_ptr<Registration> fallback_;      // null when none
   std::unique_ptr<Registration> seed_;          // seed_registration; null when none
   std::unique_ptr<Registration> failure_seed_;  // seed_on_failure; null when none
+  std::unique_ptr<Registration> wide_;          // the primary with the wide basin (no motion prior); null when off
+  int tracking_levels_ = 0;  // levels of the frame and model pyramids: the configured ones, plus the wide basin's
   ColourCheck colour_check_;
   std::unique_ptr<Reference> reference_;        // model maps + intensity at the last pose
   KeyframeMap keyframes_;
@@ -329,6 +336,7 @@ class Pipeline {
   };
   std::vector<Anchor> anchors_;
   SE3 velocity_;          // T_prev_cur of the last accepted frame pair
+  bool motion_prior_ = false;  // velocity_ is a measured motion (not the identity after a start, loss or relocalisation)
   long lost_spell_ = 0;   // consecutive lost frames up to now
   size_t frames_ = 0, lost_ = 0;
 };

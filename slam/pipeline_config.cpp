@@ -222,6 +222,7 @@ void visit_scalars(V&& v, PipelineConfig& c) {
   v("backend", c.backend);
   v("tracking_level", c.tracking_level);
   v("constant_velocity", c.constant_velocity);
+  v("wide_basin_without_prior", c.wide_basin_without_prior);
   v("max_speed_m_per_s", c.max_speed_m_per_s);
   v("max_angular_speed_deg_per_s", c.max_angular_speed_deg_per_s);
   v("max_degenerate_dims", c.max_degenerate_dims);
@@ -287,6 +288,14 @@ RegistrationOptions pipeline_registration_options(const std::string& method) {
   o.driver.so3_iterations.clear();
   const size_t levels = size_t(PipelineConfig{}.pyramid.levels);
   if (o.driver.iterations.size() > levels) o.driver.iterations.resize(levels);
+  return o;
+}
+
+RegistrationOptions pipeline_wide_basin_options(RegistrationOptions o) {
+  std::vector<int>& it = o.driver.iterations;
+  it.push_back(it.empty() ? 4 : std::max(4, it.back()));
+  // so3_prealign reads intensity: a depth-only method skips it (gauss_newton.cpp), so setting it is harmless.
+  o.driver.so3_iterations = {10, 5};
   return o;
 }
 

@@ -52,7 +52,9 @@ struct PipelineConfig {
   // the fallback), and the retry decides the frame where it does better. Its cost (sparse: ORB, ~25 ms) lands on
   // rejected frames only; where the primary is accepted it never runs (FrameResult::seeded_on_failure). Default
   // "sparse": it tracks the `fast` preset (15 degrees and 10 cm a frame) that dense methods lose from the identity
-  // and leaves the real sequences as they were (bench/results/accuracy/large_motion.md). Empty = off.
+  // and leaves the real sequences as they were (bench/results/accuracy/large_motion.md). It also cross-checks a
+  // frame without a motion prior that the wide basin placed (wide_basin_without_prior below): the retry from its
+  // estimate replaces that placement where its cost is lower. Empty = off.
   std::string seed_on_failure = "sparse";
   std::string backend = "cpu";             // reduction backend: cpu | opencl
   fusion::VolumeParams volume;             // voxel_m 0.01, truncation 4 voxels, capacity, weight cap
@@ -84,6 +86,14 @@ struct PipelineConfig {
   // Motion prior: the initial guess of T_ref_cur is the last inter-frame motion (constant velocity) when true, the
   // identity (KinectFusion) when false. Never used right after a lost frame.
   bool constant_velocity = true;
+  // Where the pipeline has no motion prior (the frame after initialisation, a lost frame or a relocalisation: the
+  // guess is the identity, and the motion since the reference is unknown and may be large), the primary runs with
+  // a wider basin: one coarser pyramid level and the rotation-first step (pipeline_wide_basin_options). On pairs of
+  // real frames 3 and 5 apart from the identity it converges on 99 / 85 % against 89 / 22 % (fr1/rpy 150-269,
+  // bench/results/accuracy/large_motion.md); on consecutive frames from the prior it costs time and no accuracy,
+  // so it never runs there. Only with constant_velocity: without it the identity is the chosen prior (KinectFusion).
+  // From far it can settle in a wrong minimum the map's depth does not refute; seed_on_failure cross-checks it.
+  bool wide_basin_without_prior = true;
   // Plausibility (per second of sensor time since the last good frame): a faster motion is a tracking failure.
   // The gate rejects wild registrations, not fast hands: hand-held motion bursts reach a few hundred deg/s (the
   // recordings we hold peak at 179-193 deg/s and 1.1 m/s over 1/30 s), and the depth consistency check beside it
@@ -144,6 +154,11 @@ inline constexpr double kPipelineRgbWeight = 0.4;
 // without the registry's wide-basin settings for guess-free pairs (no rotation-first step, at most the default
 // pyramid's levels: the pipeline tracks from a motion prior; bench/results/accuracy/large_motion.md).
 RegistrationOptions pipeline_registration_options(const std::string& method);
+// The options the pipeline tracks with where it has no motion prior (PipelineConfig::wide_basin_without_prior),
+// from those it tracks with otherwise: one coarser level (its iterations the coarsest's, at least 4) and, for a
+// method reading colour, the rotation-first step on the two coarsest levels (10 and 5 iterations, combined's
+// registry default). The caller builds the frame and model pyramids with the extra level.
+RegistrationOptions pipeline_wide_basin_options(RegistrationOptions tracking);
 // A registry method's options from a JSON object of its keys (as report.json's "registration_options"): the
 // method's registry defaults (default_registration_options, not the pipeline's) overridden by the keys present,
 // validated. hf::Error naming `where` and the key for an unknown key, a wrong type or a value out of range.

@@ -208,6 +208,7 @@ RunSummary summarize(const SequenceRun& run, const Pipeline& pipeline, const Fra
                          f.state != TrackState::relocalised;
     s.frames_seeded_on_failure += f.seeded_on_failure;
     s.frames_placed_by_seed += f.placed_by_seed;
+    s.frames_wide_basin += f.wide_basin;
     s.coverage += f.pose_valid ? 1.0 : 0.0;
     spell = f.state == TrackState::lost ? spell + 1 : 0;
     s.lost_spells += spell == 1;
@@ -299,6 +300,7 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
   j["frames_fallback"] = s.frames_fallback;
   j["frames_seeded_on_failure"] = s.frames_seeded_on_failure;
   j["frames_placed_by_seed"] = s.frames_placed_by_seed;
+  j["frames_wide_basin"] = s.frames_wide_basin;
   j["coverage"] = s.coverage;
   j["lost_spells"] = s.lost_spells;
   j["longest_lost_spell"] = s.longest_lost_spell;
@@ -368,6 +370,7 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
     if (!f.message.empty()) fj["message"] = f.message;
     if (f.seeded_on_failure) fj["seeded_on_failure"] = true;
     if (f.placed_by_seed) fj["placed_by_seed"] = true;
+    if (f.wide_basin) fj["wide_basin"] = true;
     if (f.term_disagreement.valid)
       fj["terms"] = {{"chi2", f.term_disagreement.chi2},
                      {"translation_m", f.term_disagreement.translation_m},
@@ -413,7 +416,8 @@ std::string report_markdown(const RunSummary& s, const SequenceRun& run, const F
      << "| frames | " << s.frames << " processed, " << s.frames_bad << " unreadable, " << s.frames_lost << " lost, "
      << s.frames_degenerate << " degenerate, " << s.frames_poor << " poor, " << s.frames_odometry
      << " odometry only, " << s.frames_relocalised << " relocalised, " << s.frames_seeded_on_failure
-     << " seeded on failure (" << s.frames_placed_by_seed << " placed by the retry)"
+     << " seeded on failure (" << s.frames_placed_by_seed << " placed by the retry), " << s.frames_wide_basin
+     << " tracked with the wide basin (no motion prior)"
      << (s.interrupted ? " (interrupted)" : "") << (run.stopped_by.empty() ? "" : " (stopped early: " + run.stopped_by + ")")
      << " |\n"
      << "| coverage | " << fmt(100.0 * s.coverage, 1) << " % of frames with a pose; " << s.lost_spells

@@ -88,6 +88,7 @@ struct RunSummary {
   long frames_odometry = 0, frames_relocalised = 0, frames_fallback = 0;  // see slam/pipeline.h TrackState
   // Frames on which seed_on_failure ran, and those its retry placed (FrameResult::seeded_on_failure, placed_by_seed).
   long frames_seeded_on_failure = 0, frames_placed_by_seed = 0;
+  long frames_wide_basin = 0;  // frames tracked without a motion prior, with the wide basin (FrameResult::wide_basin)
   double coverage = 0.0;        // frames with a valid pose / frames
   long lost_spells = 0, longest_lost_spell = 0;  // runs of consecutive lost frames
   size_t keyframes = 0;

@@ -276,6 +276,7 @@ void bind_results(py::module_& m) {
       .def_readonly("message", &slam::FrameResult::message)
       .def_readonly("seeded_on_failure", &slam::FrameResult::seeded_on_failure)
       .def_readonly("placed_by_seed", &slam::FrameResult::placed_by_seed)
+      .def_readonly("wide_basin", &slam::FrameResult::wide_basin)
       .def_property_readonly("ms", [](const slam::FrameResult& r) { return stage_ms(r.ms); });
   py::class_<RunResult>(m, "RunResult")
       .def_property_readonly("frames", [](const RunResult& r) { return r.run.frames; })

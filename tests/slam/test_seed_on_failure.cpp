@@ -71,13 +71,17 @@ TEST(SeedOnFailure, FastPresetTracksAtTheDefaults) {
   }
 }
 
-// Where the motion is small the primary places every frame from the motion prior: the seed never runs, and the
-// trajectory is the one without it, bit for bit.
+// Where the motion is small the primary places every frame from the motion prior: the seed never runs there. It
+// runs on the one frame without a prior (the second: wide_basin_without_prior's cross-check, tests/slam/
+// test_wide_basin.cpp); with that off too, the trajectory is the one without the seed, bit for bit.
 TEST(SeedOnFailure, NeverRunsWhereThePrimaryIsAccepted) {
   PipelineConfig off = defaults_at_half_res();
   off.seed_on_failure.clear();
+  off.wide_basin_without_prior = false;
+  PipelineConfig on = defaults_at_half_res();
+  on.wide_basin_without_prior = false;
   const PresetRun without = run_seeded("room", 8, off);
-  const PresetRun with = run_seeded("room", 8, defaults_at_half_res());
+  const PresetRun with = run_seeded("room", 8, on);
   EXPECT_EQ(with.summary.frames_lost, 0);
   EXPECT_EQ(with.summary.frames_seeded_on_failure, 0);
   ASSERT_EQ(with.run.frames.size(), without.run.frames.size());
@@ -87,6 +91,13 @@ TEST(SeedOnFailure, NeverRunsWhereThePrimaryIsAccepted) {
     EXPECT_EQ(f.state, without.run.frames[i].state) << "frame " << f.index;
     EXPECT_TRUE(f.T_world_camera.matrix() == without.run.frames[i].T_world_camera.matrix())
         << "frame " << f.index;
+  }
+  // At the defaults: only the frame without a prior.
+  const PresetRun defaults = run_seeded("room", 8, defaults_at_half_res());
+  EXPECT_EQ(defaults.summary.frames_lost, 0);
+  for (const FrameResult& f : defaults.run.frames) {
+    EXPECT_EQ(f.seeded_on_failure, f.wide_basin) << "frame " << f.index;
+    EXPECT_EQ(f.wide_basin, f.index == 1) << "frame " << f.index;
   }
 }
 
