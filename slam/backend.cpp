@@ -194,7 +194,7 @@ LoopJobResult LoopCloser::run(LoopJob job) {
     // (4) The graph over the keyframes up to k: the later ones of this job were not made yet when the tracker
     // reached k, as far as the graph is concerned.
     const PoseGraphResult res =
-        keyframe_graph(upto, loops, window, options_.window_tracking_information_scale).optimize(graph);
+        keyframe_graph(upto, loops, window, options_.tracking_information_scale_in_graph()).optimize(graph);
     if (!res.ok()) {
       loops.resize(loops.size() - new_loops);
       continue;

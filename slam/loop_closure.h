@@ -57,19 +57,24 @@ struct LoopClosureOptions {
   // Keyframe window edges (DVO-SLAM's local constraints): each new keyframe k is also registered densely against
   // keyframes k-2 .. k-window_keyframes (k-1 is its odometry edge already), from the relative pose of their current
   // poses, verified as a loop is (min_inlier_ratio, min_consistent, no degenerate direction), and the graph is
-  // solved at every keyframe that added one, loop or not. 0 = off (the graph is solved only when a loop closes).
-  // Cost: up to window_keyframes - 1 registrations at the tracking level and one solve per keyframe, on the
-  // back-end's thread. Measured in bench/results/accuracy/ate_levers.md ("window"): off by default.
+  // solved at every keyframe that added one, loop or not. 0 or 1 = off (the graph is solved only when a loop
+  // closes). Cost: up to window_keyframes - 1 registrations at the tracking level and one solve per keyframe, on the
+  // back-end's thread, and the re-fusions the solves call for. Off by default: no setting tried kept both choice
+  // parts no worse (bench/results/accuracy/ate_levers.md, session 7).
   int window_keyframes = 0;
   // The window edge's information is the registration's J^T W J times this: two frames' registration errors are
   // correlated (bias, not white noise), so their J^T W J overstates what they know (the failure of near loops:
   // bench/results/tracking.md). In (0, 1e6].
   double window_information_scale = 1.0;
-  // With window edges on, the tracked relative pose of consecutive keyframes (frame-to-model, Keyframe::
-  // T_previous_this) is kept in the graph beside the registered chain, its information (odometry_information of
-  // the tracking registration over the frames between) times this; 0 = left out (the graph then holds keyframe
-  // registrations alone, and each solve replaces the model-tracked poses with theirs).
+  // With window edges on (and only then), the tracked relative pose of consecutive keyframes (frame-to-model,
+  // Keyframe::T_previous_this) is kept in the graph beside the registered chain, its information
+  // (odometry_information of the tracking registration over the frames between) times this; 0 = left out (the
+  // graph then holds keyframe registrations alone, and each solve replaces the model-tracked poses with theirs).
   double window_tracking_information_scale = 0.0;
+  // window_tracking_information_scale when window edges are on (window_keyframes >= 2), else 0.
+  double tracking_information_scale_in_graph() const {
+    return window_keyframes >= 2 ? window_tracking_information_scale : 0.0;
+  }
 
   void validate() const;  // hf::Error naming the bad field
 };

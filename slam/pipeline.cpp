@@ -682,7 +682,7 @@ void Pipeline::pay_loop_refusions(FrameResult* r) {
 // failed.
 bool Pipeline::apply_graph(const PoseGraphOptions& options) {
   const PoseGraph g =
-      keyframe_graph(keyframes_, loops_, window_, config_.loop_closure.window_tracking_information_scale);
+      keyframe_graph(keyframes_, loops_, window_, config_.loop_closure.tracking_information_scale_in_graph());
   const PoseGraphResult res = g.optimize(options);
   if (!res.ok()) return false;
   for (size_t i = 0; i < keyframes_.size() && i < res.T_world_node.size(); ++i)

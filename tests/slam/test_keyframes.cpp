@@ -154,7 +154,8 @@ TEST(KeyframeGraph, WindowEdgesCutABiasedChainsDriftToTheLeastSquaresSolution) {
     if (i > 0) map.set_odometry(size_t(i), keyframes_pose(d + e), lambda * Matrix6d::Identity());
   }
   std::vector<LoopEdge> window;
-  for (int i = 2; i < K; ++i) window.push_back({size_t(i - 2), size_t(i), keyframes_pose(2 * d), lambda * Matrix6d::Identity()});
+  for (int i = 2; i < K; ++i)
+    window.push_back({size_t(i - 2), size_t(i), keyframes_pose(2 * d), lambda * Matrix6d::Identity()});
   const PoseGraph g = keyframe_graph(map, {}, window);
   ASSERT_EQ(g.num_edges(), size_t(K - 1 + K - 2));
   for (size_t k = K - 1; k < g.num_edges(); ++k) EXPECT_EQ(g.edges()[k].kind, PoseGraphEdgeKind::odometry);
