@@ -9,7 +9,9 @@
 #           trunc:REF:F (integrate.truncation_depth_ref_m REF, truncation_min_fraction F); several joined by
 #           + (e.g. sdfnoise:1.5+trunc:3:0.5), wdepth:REF (integrate.weight_depth_ref_m REF), sdfkey:KEY:VALUE (any
 #           key of the hand-over sdf, e.g. sdfkey:robust_sdf:student_t), key:KEY:VALUE (a top-level key of the
-#           configuration, e.g. key:wide_basin_without_prior:false)
+#           configuration, e.g. key:wide_basin_without_prior:false), window:N:SCALE[:TRACK] (keyframe window
+#           edges to the N-1 keyframes before the previous one, information times SCALE, the tracked keyframe steps
+#           kept with information times TRACK, 0 when left out: loop_closure.window_*)
 # e.g. HF_BIN=/tmp/hf bash scripts/bench_ate_levers.sh out/levers "rpy0_149 7s0_99" "off trunc:3:0.5"
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -41,6 +43,8 @@ for key in $inputs; do
              parts+=("{\"$a\": $b}") ;;
         wdepth) parts+=("{\"integrate\": {\"weight_depth_ref_m\": $a}}") ;;
         trunc) parts+=("{\"integrate\": {\"truncation_depth_ref_m\": $a, \"truncation_min_fraction\": $b}}") ;;
+        window) IFS=: read -r _ n scale track <<< "$one"  # window:N:SCALE[:TRACK]
+                parts+=("{\"loop_closure\": {\"window_keyframes\": $n, \"window_information_scale\": $scale, \"window_tracking_information_scale\": ${track:-0}}}") ;;
         *) echo "bench_ate_levers: unknown mode '$one'" >&2; exit 1 ;;
       esac
     done

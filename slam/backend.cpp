@@ -6,6 +6,7 @@
 #include <tbb/task_arena.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <utility>
 
@@ -130,6 +131,8 @@ LoopJobResult LoopCloser::run(LoopJob job) {
   // The job's own copy of the graph's inputs; poses move with each solve that closes a loop.
   std::vector<Keyframe>& nodes = job.keyframes;
   std::vector<LoopEdge> loops = std::move(job.loops);
+  std::vector<LoopEdge> window = std::move(job.window);
+  const size_t window_keyframes = size_t(std::max(options_.window_keyframes, 0));
   bool moved = false;
   PoseGraphOptions graph = options_.graph;
   if (!job.time_budget) graph.time_budget_ms = backend_detail::kNoTimeBudgetMs;
@@ -138,6 +141,7 @@ LoopJobResult LoopCloser::run(LoopJob job) {
     const size_t k = added.id;
     if (k >= nodes.size() || added.images.empty()) {  // images dropped for the budget before the job took them
       last_keyframe_pyramid_.reset();  // the next keyframe's odometry edge has no previous images to meet
+      window_pyramids_.clear();        // nor the window edges (an image-less keyframe breaks the window)
       continue;
     }
     const FramePyramid kp = pyramid_of(added.images);
@@ -150,6 +154,23 @@ LoopJobResult LoopCloser::run(LoopJob job) {
         out.odometry.push_back({k, reg->T_ref_cur, reg->information});
       }
     }
+    // (1b) Window edges to the keyframes before k-1 whose pyramids are still held, from the relative pose their
+    // current poses imply (the graph's own estimate).
+    size_t new_window = 0;
+    if (window_keyframes >= 2) {
+      for (size_t j = 2; j <= window_keyframes && j <= k; ++j) {
+        const auto p = window_pyramids_.find(k - j);
+        if (p == window_pyramids_.end() || p->second.num_levels() == 0) continue;
+        const SE3 guess = nodes[k - j].T_world_camera.inverse() * nodes[k].T_world_camera;
+        ++out.window_registrations;
+        const std::optional<RegistrationResult> reg = verify(kp, p->second, guess);
+        if (!reg || reg->degenerate_dims != 0) continue;
+        window.push_back({k - j, k, reg->T_ref_cur, options_.window_information_scale * reg->information});
+        ++new_window;
+      }
+      window_pyramids_[k] = kp;
+      while (window_pyramids_.size() > window_keyframes) window_pyramids_.erase(window_pyramids_.begin());
+    }
     images_[k] = std::move(added.images);
     last_keyframe_pyramid_ = kp;
     // (2) Candidates among the keyframes up to k, from the job's current poses.
@@ -158,7 +179,7 @@ LoopJobResult LoopCloser::run(LoopJob job) {
     for (size_t i = 0; i <= k; ++i) has_images[i] = images_.count(i) > 0;
     const std::vector<Keyframe> upto(nodes.begin(), nodes.begin() + std::ptrdiff_t(k + 1));
     const std::vector<size_t> candidates = loop_candidates(upto, has_images, k, added.matches, options_);
-    if (candidates.empty()) continue;
+    if (candidates.empty() && new_window == 0) continue;
     // (3) Verification.
     size_t new_loops = 0;
     for (size_t c : candidates) {
@@ -169,32 +190,40 @@ LoopJobResult LoopCloser::run(LoopJob job) {
       loops.push_back({c, k, reg->T_ref_cur, reg->information});
       ++new_loops;
     }
-    if (new_loops == 0) continue;
+    if (new_loops == 0 && new_window == 0) continue;
     // (4) The graph over the keyframes up to k: the later ones of this job were not made yet when the tracker
     // reached k, as far as the graph is concerned.
-    const PoseGraphResult res = keyframe_graph(upto, loops).optimize(graph);
+    const PoseGraphResult res =
+        keyframe_graph(upto, loops, window, options_.tracking_information_scale_in_graph()).optimize(graph);
     if (!res.ok()) {
       loops.resize(loops.size() - new_loops);
       continue;
     }
-    if (res.loop_accepted.size() == loops.size()) {
+    bool loop_closed = new_loops > 0;
+    if (new_loops > 0 && res.loop_accepted.size() == loops.size()) {
       const size_t first = loops.size() - new_loops;
       std::vector<LoopEdge> kept(loops.begin(), loops.begin() + std::ptrdiff_t(first));
       for (size_t i = first; i < loops.size(); ++i)
         if (res.loop_accepted[i]) kept.push_back(loops[i]);
-      const bool any = kept.size() > first;
+      loop_closed = kept.size() > first;
       loops = std::move(kept);
-      if (!any) continue;
+      // Every new loop rejected: nothing moves, unless window edges came with k (the solution is then the graph's
+      // without the rejected loops, which optimize() solved again).
+      if (!loop_closed && new_window == 0) continue;
     }
     if (res.T_world_node.size() != k + 1) continue;  // cannot happen: one node per keyframe
     // The keyframes after k move rigidly with k, as the tracker (and so every later keyframe) would have.
     const SE3 correction = res.T_world_node[k] * nodes[k].T_world_camera.inverse();
     for (size_t i = 0; i <= k; ++i) nodes[i].T_world_camera = res.T_world_node[i];
     for (size_t i = k + 1; i < nodes.size(); ++i) nodes[i].T_world_camera = correction * nodes[i].T_world_camera;
-    ++out.loops_closed;
+    if (loop_closed)
+      ++out.loops_closed;
+    else
+      ++out.window_solves;
     moved = true;
   }
   out.loops = std::move(loops);
+  out.window = std::move(window);
   if (moved)
     for (const Keyframe& n : nodes) out.T_world_keyframe.push_back(n.T_world_camera);
   out.ms = backend_detail::ms_between(t0, std::chrono::steady_clock::now());

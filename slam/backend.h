@@ -85,6 +85,7 @@ struct LoopJob {
   std::vector<Keyframe> keyframes;        // every keyframe's pose and edges, images left empty
   std::vector<bool> has_images;           // per keyframe: images still kept (KeyframeMap::has_images)
   std::vector<LoopEdge> loops;            // the verified loops so far
+  std::vector<LoopEdge> window;           // the keyframe window edges so far (LoopClosureOptions::window_keyframes)
   std::vector<LoopJobKeyframe> added;     // the keyframes new since the last job, oldest first (ids ascending)
   std::string method;                     // the registration that verifies (the tracking primary's name)
   RegistrationOptions method_options;
@@ -102,8 +103,11 @@ struct LoopJobResult {
   };
   std::vector<Odometry> odometry;
   std::vector<LoopEdge> loops;            // the whole list after the job (new loops appended, rejected ones gone)
-  size_t loops_closed = 0;                // solves that moved the keyframes
-  // The keyframes' poses after the last solve that moved them; empty when no loop closed.
+  std::vector<LoopEdge> window;           // the whole list of window edges after the job (new ones appended)
+  size_t loops_closed = 0;                // solves that closed a loop and moved the keyframes
+  size_t window_solves = 0;               // solves for new window edges alone that moved the keyframes
+  size_t window_registrations = 0;        // window pairs registered by this job (verified or not)
+  // The keyframes' poses after the last solve that moved them; empty when no solve moved them.
   std::vector<SE3> T_world_keyframe;
   double ms = 0.0;                        // the job's own wall time on the back-end
 };
@@ -115,7 +119,10 @@ struct LoopJobResult {
 // keyframes (slam/loop_closure.h loop_candidates, from the job's current poses); (3) each candidate registered
 // from the relative pose their poses imply, verified by inlier ratio and depth agreement; (4) when a loop was
 // verified, the keyframe graph solved (loops the graph's consistency test rejects are dropped; when it rejects
-// all new ones nothing moves), and the job's poses take the solution before the next added keyframe.
+// all new ones nothing moves), and the job's poses take the solution before the next added keyframe. With
+// window_keyframes > 0, (1b) after (1): k registered against keyframes k-2 .. k-window_keyframes from their current
+// relative pose and verified as a loop is, each verified pair a window edge; (4) then also runs when k added a
+// window edge and no loop (a local bundle adjustment of the keyframe poses).
 // Thread-safety: none; one run() at a time (the pipeline submits the next job only after the last one's result).
 class LoopCloser {
  public:
@@ -138,6 +145,8 @@ class LoopCloser {
   std::unique_ptr<Registration> verifier_;
   std::string verifier_name_;
   std::optional<FramePyramid> last_keyframe_pyramid_;  // the newest keyframe run so far, for the next odometry edge
+  // The newest keyframes' pyramids (at most window_keyframes), for the window edges without decoding them again.
+  std::map<size_t, FramePyramid> window_pyramids_;
   std::map<size_t, CompressedRgbd> images_;            // keyframe id -> images, while the keyframe keeps them
 };
 

@@ -103,6 +103,11 @@ std::vector<ConfigKey> make_reference() {
       row("loop_closure.time_budget_ms", "ms", above(0), "wall-clock budget of one graph optimisation"),
       row("loop_closure.background", "", any(), "run the back-end on its own thread (hf-backend)"),
       row("loop_closure.apply_delay_frames", "frames", closed(1, 10000), "a job started at frame s lands at s + this"),
+      row("loop_closure.window_keyframes", "keyframes", closed(0, 50),
+          "keyframe window edges: each new keyframe also registered to keyframes k-2 .. k-this (0 = off)"),
+      row("loop_closure.window_information_scale", "", open_closed(0, 1e6), "window edges' information scale"),
+      row("loop_closure.window_tracking_information_scale", "", closed(0, 1e6),
+          "with window edges: the tracked keyframe steps kept in the graph, information times this (0 = not)"),
       // reintegration (slam/reintegration.h)
       row("reintegration.enabled", "", any(), "re-fuse frames whose pose a loop closure moved"),
       row("reintegration.min_translation_m", "m", at_least(0), "a correction must also move this much (0: off)"),

@@ -22,6 +22,11 @@ void LoopClosureOptions::validate() const {
     throw Error("loop_closure.max_iterations must be in [1, 10000]");
   if (apply_delay_frames < 1 || apply_delay_frames > 10000)
     throw Error("loop_closure.apply_delay_frames must be in [1, 10000]");
+  if (window_keyframes < 0 || window_keyframes > 50) throw Error("loop_closure.window_keyframes must be in [0, 50]");
+  if (!(window_information_scale > 0 && window_information_scale <= 1e6))
+    throw Error("loop_closure.window_information_scale must be in (0, 1e6]");
+  if (!(window_tracking_information_scale >= 0 && window_tracking_information_scale <= 1e6))
+    throw Error("loop_closure.window_tracking_information_scale must be in [0, 1e6]");
 }
 
 std::vector<size_t> loop_candidates(const KeyframeMap& keyframes, size_t k,
@@ -60,11 +65,13 @@ Matrix6d odometry_information(const Matrix6d& information, size_t frames) {
   return info;
 }
 
-PoseGraph keyframe_graph(const KeyframeMap& keyframes, const std::vector<LoopEdge>& loops) {
-  return keyframe_graph(keyframes.all(), loops);
+PoseGraph keyframe_graph(const KeyframeMap& keyframes, const std::vector<LoopEdge>& loops,
+                         const std::vector<LoopEdge>& window, double tracking_information_scale) {
+  return keyframe_graph(keyframes.all(), loops, window, tracking_information_scale);
 }
 
-PoseGraph keyframe_graph(const std::vector<Keyframe>& keyframes, const std::vector<LoopEdge>& loops) {
+PoseGraph keyframe_graph(const std::vector<Keyframe>& keyframes, const std::vector<LoopEdge>& loops,
+                         const std::vector<LoopEdge>& window, double tracking_information_scale) {
   PoseGraph g;
   for (const Keyframe& k : keyframes) g.add_node(k.T_world_camera);
   for (size_t i = 1; i < keyframes.size(); ++i) {
@@ -76,10 +83,26 @@ PoseGraph keyframe_graph(const std::vector<Keyframe>& keyframes, const std::vect
     if (b.odometry_information.allFinite() && b.odometry_information.trace() > 0) {
       e.T_from_to = b.T_previous_this_registered;
       e.information = odometry_information(b.odometry_information, 1);
+      if (tracking_information_scale > 0.0) {
+        PoseGraphEdge tracked = e;
+        tracked.T_from_to = b.T_previous_this;
+        tracked.information = odometry_information(tracking_information_scale * b.information,
+                                                   b.frame_index - a.frame_index);
+        g.add_edge(tracked);
+      }
     } else {
       e.T_from_to = b.T_previous_this;
       e.information = odometry_information(b.information, b.frame_index - a.frame_index);
     }
+    e.kind = PoseGraphEdgeKind::odometry;
+    g.add_edge(e);
+  }
+  for (const LoopEdge& w : window) {
+    PoseGraphEdge e;
+    e.from = w.from;
+    e.to = w.to;
+    e.T_from_to = w.T_from_to;
+    e.information = w.information;
     e.kind = PoseGraphEdgeKind::odometry;
     g.add_edge(e);
   }

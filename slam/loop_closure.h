@@ -54,6 +54,27 @@ struct LoopClosureOptions {
   // (tens of ms on an unloaded core) beside tracking, so the tracker rarely waits.
   bool background = true;
   int apply_delay_frames = 3;
+  // Keyframe window edges (DVO-SLAM's local constraints): each new keyframe k is also registered densely against
+  // keyframes k-2 .. k-window_keyframes (k-1 is its odometry edge already), from the relative pose of their current
+  // poses, verified as a loop is (min_inlier_ratio, min_consistent, no degenerate direction), and the graph is
+  // solved at every keyframe that added one, loop or not. 0 or 1 = off (the graph is solved only when a loop
+  // closes). Cost: up to window_keyframes - 1 registrations at the tracking level and one solve per keyframe, on the
+  // back-end's thread, and the re-fusions the solves call for. Off by default: no setting tried kept both choice
+  // parts no worse (bench/results/accuracy/ate_levers.md, session 7).
+  int window_keyframes = 0;
+  // The window edge's information is the registration's J^T W J times this: two frames' registration errors are
+  // correlated (bias, not white noise), so their J^T W J overstates what they know (the failure of near loops:
+  // bench/results/tracking.md). In (0, 1e6].
+  double window_information_scale = 1.0;
+  // With window edges on (and only then), the tracked relative pose of consecutive keyframes (frame-to-model,
+  // Keyframe::T_previous_this) is kept in the graph beside the registered chain, its information
+  // (odometry_information of the tracking registration over the frames between) times this; 0 = left out (the
+  // graph then holds keyframe registrations alone, and each solve replaces the model-tracked poses with theirs).
+  double window_tracking_information_scale = 0.0;
+  // window_tracking_information_scale when window edges are on (window_keyframes >= 2), else 0.
+  double tracking_information_scale_in_graph() const {
+    return window_keyframes >= 2 ? window_tracking_information_scale : 0.0;
+  }
 
   void validate() const;  // hf::Error naming the bad field
 };
@@ -76,9 +97,15 @@ std::vector<size_t> loop_candidates(const std::vector<Keyframe>& keyframes, cons
 
 // The pose graph over every keyframe (current poses as the initial values) with the odometry chain and `loops`.
 // An odometry edge is the keyframe-to-keyframe registration where one was measured (Keyframe::
-// odometry_information non-zero), else the tracked relative pose.
-PoseGraph keyframe_graph(const KeyframeMap& keyframes, const std::vector<LoopEdge>& loops);
-PoseGraph keyframe_graph(const std::vector<Keyframe>& keyframes, const std::vector<LoopEdge>& loops);
+// odometry_information non-zero), else the tracked relative pose. `window` edges (LoopClosureOptions::
+// window_keyframes; their information as the graph uses it, scaled when measured) join as odometry edges (no robust
+// loss, never rejected: each was verified). tracking_information_scale > 0 adds, for each consecutive pair whose
+// chain edge is a registration, the tracked relative pose as a second odometry edge with its information times
+// that scale (LoopClosureOptions::window_tracking_information_scale).
+PoseGraph keyframe_graph(const KeyframeMap& keyframes, const std::vector<LoopEdge>& loops,
+                         const std::vector<LoopEdge>& window = {}, double tracking_information_scale = 0.0);
+PoseGraph keyframe_graph(const std::vector<Keyframe>& keyframes, const std::vector<LoopEdge>& loops,
+                         const std::vector<LoopEdge>& window = {}, double tracking_information_scale = 0.0);
 
 // Information of an odometry edge spanning `frames` frames whose later end was placed with `information`: the
 // information divided by the frames (at least 1), floored at a small multiple of the identity so a keyframe placed

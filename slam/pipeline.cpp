@@ -614,6 +614,7 @@ void Pipeline::start_loop_job(FrameResult* r) {
     job.has_images.push_back(keyframes_.has_images(i));
   }
   job.loops = loops_;
+  job.window = window_;
   for (size_t id = keyframes_handed_; id < limit; ++id) {
     LoopJobKeyframe added;
     added.id = id;
@@ -672,6 +673,8 @@ void Pipeline::apply_loop_result(const LoopJobResult& res, FrameResult* r) {
   for (const LoopJobResult::Odometry& o : res.odometry)
     if (o.id < keyframes_.size()) keyframes_.set_odometry(o.id, o.T_previous_this, o.information);
   loops_ = res.loops;  // only jobs change the loops, and one runs at a time: the list it started from is ours
+  window_ = res.window;  // likewise
+  window_registrations_ += res.window_registrations;
   if (res.T_world_keyframe.empty() || res.keyframes == 0 || res.keyframes > keyframes_.size()) return;
   // The keyframes made after the snapshot, the current pose and the tracking reference (its maps are in the
   // camera frame) move rigidly with the snapshot's newest keyframe.
@@ -682,10 +685,13 @@ void Pipeline::apply_loop_result(const LoopJobResult& res, FrameResult* r) {
   if (T_world_cur_) T_world_cur_ = correction * *T_world_cur_;
   reference_->T_world_model = correction * reference_->T_world_model;
   loops_closed_ += res.loops_closed;
-  r->loop_closed = true;
+  window_solves_ += res.window_solves;
+  r->loop_closed = res.loops_closed > 0;
   ++corrections_;
   if (!config_.reintegration.enabled) return;
   fused_.schedule(keyframes_, camera_, config_.volume.voxel_m);
+  // A window solve alone moves the keyframes by a local adjustment: its re-fusions go at the per-frame rate.
+  if (res.loops_closed == 0) return;
   // The most-displaced frames are the ones just before the loop, whose surfaces the camera sees now: until they
   // are re-fused, the next frames track against them at their old poses and snap back by the correction.
   // Realtime mode has only its per-frame budget. Offline, frames_after_loop re-fusions are owed from this frame
@@ -716,7 +722,8 @@ void Pipeline::pay_loop_refusions(FrameResult* r) {
 // Solves the keyframe graph (finish(true)); on success every keyframe takes its solution. False when the solve
 // failed.
 bool Pipeline::apply_graph(const PoseGraphOptions& options) {
-  const PoseGraph g = keyframe_graph(keyframes_, loops_);
+  const PoseGraph g =
+      keyframe_graph(keyframes_, loops_, window_, config_.loop_closure.tracking_information_scale_in_graph());
   const PoseGraphResult res = g.optimize(options);
   if (!res.ok()) return false;
   for (size_t i = 0; i < keyframes_.size() && i < res.T_world_node.size(); ++i)
@@ -759,7 +766,7 @@ double Pipeline::finish(bool global) {
     o.max_iterations = std::max(o.max_iterations, 500);
     // Without a loop the graph is a chain: its solution would only swap the model-tracked poses for the chained
     // keyframe-to-keyframe registrations (each from two frames, not the whole map), so nothing global is solved.
-    if (!loops_.empty()) apply_graph(o);
+    if (!loops_.empty() || !window_.empty()) apply_graph(o);
     if (config_.reintegration.enabled) fused_.refuse_all(keyframes_, grid_, camera_, config_.integrate, &store_);
   } else if (config_.reintegration.enabled) {
     fused_.schedule(keyframes_, camera_, config_.volume.voxel_m);

@@ -203,6 +203,11 @@ class Pipeline {
   const KeyframeMap& keyframes() const { return keyframes_; }
   const std::vector<LoopEdge>& loops() const { return loops_; }
   size_t loops_closed() const { return loops_closed_; }
+  // Keyframe window edges (loop_closure.window_keyframes), the solves they alone made, and the window pairs the
+  // back-end registered (verified or not).
+  const std::vector<LoopEdge>& window_edges() const { return window_; }
+  size_t window_solves() const { return window_solves_; }
+  size_t window_registrations() const { return window_registrations_; }
   // Whether the colour is registered to the depth, as judged so far, and the method that tracks now (the
   // configured registration, or colour_check.depth_only_registration once the colour was judged unregistered).
   const ColourCheck& colour_check() const { return colour_check_; }
@@ -299,6 +304,8 @@ class Pipeline {
   FusedFrames fused_;
   std::vector<LoopEdge> loops_;
   size_t loops_closed_ = 0;
+  std::vector<LoopEdge> window_;  // keyframe window edges (LoopJobResult::window)
+  size_t window_solves_ = 0, window_registrations_ = 0;
   // The last kept frame while its images are compressed on a worker thread (keep_frame).
   struct KeptImages {
     CompressedRgbd images;

@@ -186,6 +186,9 @@ void visit(V&& v, LoopClosureOptions& o) {
   v("time_budget_ms", o.graph.time_budget_ms);
   v("background", o.background);
   v("apply_delay_frames", o.apply_delay_frames);
+  v("window_keyframes", o.window_keyframes);
+  v("window_information_scale", o.window_information_scale);
+  v("window_tracking_information_scale", o.window_tracking_information_scale);
 }
 template <class V>
 void visit(V&& v, ReintegrationOptions& o) {

@@ -315,7 +315,10 @@ nlohmann::json summary_to_json(const RunSummary& s, const SequenceRun& run, cons
                        {"job_mean_ms", s.backend_job_mean_ms},
                        {"job_worst_ms", s.backend_job_worst_ms},
                        {"refusion_backlog_max", s.refusion_backlog_max},
-                       {"refusion_backlog_end", pipeline.fused_frames().pending()}};
+                       {"refusion_backlog_end", pipeline.fused_frames().pending()},
+                       {"window_edges", pipeline.window_edges().size()},
+                       {"window_registrations", pipeline.window_registrations()},
+                       {"window_solves", pipeline.window_solves()}};
   j["frame_ms"] = {{"p95", s.p95_frame_ms}, {"first_quarter_mean", s.first_quarter_ms},
                    {"last_quarter_mean", s.last_quarter_ms}, {"worst", s.worst_frame_ms}};
   j["finish_ms"] = s.finish_ms;

@@ -13,6 +13,7 @@
 #include "datasets/synthetic_source.h"
 #include "slam/backend.h"
 #include "slam/pipeline.h"
+#include "slam/pose_graph.h"
 #include "slam/reintegration.h"
 #include "slam/sequence_run.h"
 #include "tests/slam/pipeline_test_util.h"
@@ -120,6 +121,69 @@ TEST(Backend, TrackingThreadShareIsBoundedPerFrameAndTheBacklogDrains) {
   size_t last = 0;
   for (size_t i = n - quarter; i < n; ++i) last += r.run.frames[i].reintegrated;
   EXPECT_LE(last, quarter * size_t(c.reintegration.frames_per_step + c.reintegration.frames_after_loop_per_step));
+}
+
+// Keyframe window edges (loop_closure.window_keyframes): on the busy lap every window edge joins a new keyframe to
+// one 2..N keyframes before it, carries information the pose graph accepts (finite, symmetric, PSD, non-zero:
+// pose_graph_edge_chi2 whitens it), the graph over the final keyframes, window edges and loops solves with finite
+// poses, and the run stays a function of its input: the same trajectory bit for bit on the thread and inline.
+struct WindowRun {
+  SequenceRun run;
+  RunSummary summary;
+  std::vector<Keyframe> keyframes;
+  std::vector<LoopEdge> loops, window;
+  size_t window_solves = 0;
+};
+
+WindowRun run_window(bool background, int window_keyframes) {
+  auto source = datasets::open_synthetic("loop", half_res("loop", kFrames));
+  PipelineConfig c = busy_backend_config(background);
+  c.loop_closure.window_keyframes = window_keyframes;
+  Pipeline pipeline(c, source->camera());
+  WindowRun out;
+  out.run = run_sequence(*source, pipeline);
+  out.summary = summarize(out.run, pipeline, *source, "loop");
+  out.keyframes = pipeline.keyframes().all();
+  out.loops = pipeline.loops();
+  out.window = pipeline.window_edges();
+  out.window_solves = pipeline.window_solves();
+  const std::optional<double> ate = out.summary.ate_rmse_m();
+  std::printf("window %d (%s): %zu window edges of %zu registered, %zu window solves, %zu loops, ATE %.2f mm\n",
+              window_keyframes, background ? "thread" : "inline", out.window.size(),
+              pipeline.window_registrations(), out.window_solves, out.summary.loops_closed,
+              ate ? 1e3 * *ate : -1.0);
+  return out;
+}
+
+TEST(Backend, WindowEdgesAreVerifiedFiniteAndTheRunStaysDeterministic) {
+  constexpr int kWindow = 3;
+  const WindowRun thread = run_window(true, kWindow);
+  ASSERT_FALSE(thread.window.empty()) << "no window edge verified: the test proves nothing";
+  EXPECT_GE(thread.window_solves + thread.summary.loops_closed, 1u);
+  for (const LoopEdge& w : thread.window) {
+    ASSERT_LT(w.to, thread.keyframes.size());
+    EXPECT_GE(w.to - w.from, 2u);
+    EXPECT_LE(w.to - w.from, size_t(kWindow));
+    PoseGraphEdge e;
+    e.from = w.from;
+    e.to = w.to;
+    e.T_from_to = w.T_from_to;
+    e.information = w.information;
+    double chi2 = 0.0;
+    EXPECT_TRUE(pose_graph_edge_chi2(e, thread.keyframes[w.from].T_world_camera, thread.keyframes[w.to].T_world_camera,
+                                     &chi2))
+        << w.from << " -> " << w.to;
+    EXPECT_TRUE(std::isfinite(chi2));
+  }
+  const PoseGraphResult res = keyframe_graph(thread.keyframes, thread.loops, thread.window).optimize();
+  ASSERT_TRUE(res.ok()) << res.message;
+  for (const SE3& T : res.T_world_node) EXPECT_TRUE(T.is_finite());
+
+  const WindowRun inline_run = run_window(false, kWindow);
+  ASSERT_EQ(inline_run.run.corrected.size(), thread.run.corrected.size());
+  for (size_t i = 0; i < thread.run.corrected.size(); ++i)
+    EXPECT_TRUE(same_bits(inline_run.run.corrected[i], thread.run.corrected[i])) << i;
+  EXPECT_EQ(inline_run.window.size(), thread.window.size());
 }
 
 TEST(Backend, LoopClosureOffStartsNoBackend) {

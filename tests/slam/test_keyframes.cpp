@@ -137,6 +137,70 @@ TEST(KeyframeGraph, OdometryEdgesKeepTheTrackedMeasurementAndAreWellPosed) {
   EXPECT_TRUE(odometry_information(nan, 3).allFinite());
 }
 
+// Keyframe window edges (loop_closure.window_keyframes) on a straight chain whose every registered step is biased:
+// K keyframes truly d apart along x, each odometry edge measuring d + e, each window edge (i-2, i) measuring 2d
+// exactly, every information lambda I (the chain's plus the floor 1). With rotations at identity the SE(3) log
+// of a pure translation is the translation, so the graph is exactly the linear least squares
+//   min sum (lambda + 1) (x_i - x_{i-1} - d - e)^2 + sum lambda (x_i - x_{i-2} - 2 d)^2,   x_0 = 0,
+// which the test solves with Eigen. Far from the chain's ends a step s solves (lambda + 1)(s - d - e) + 2 lambda
+// (2 s - 2 d) = 0: its error is e (lambda + 1) / (5 lambda + 1), a fifth of the chain's; the two end steps keep more.
+TEST(KeyframeGraph, WindowEdgesCutABiasedChainsDriftToTheLeastSquaresSolution) {
+  constexpr int K = 15;
+  const double d = 0.1, e = 0.002, lambda = 1e4;
+  KeyframeMap map;
+  const DepthImage depth = noisy_depth(16, 12, 6);
+  for (int i = 0; i < K; ++i) {
+    map.add(size_t(i * 10), i, keyframes_pose((d + e) * i), lambda * Matrix6d::Identity(), depth, {});
+    if (i > 0) map.set_odometry(size_t(i), keyframes_pose(d + e), lambda * Matrix6d::Identity());
+  }
+  std::vector<LoopEdge> window;
+  for (int i = 2; i < K; ++i)
+    window.push_back({size_t(i - 2), size_t(i), keyframes_pose(2 * d), lambda * Matrix6d::Identity()});
+  const PoseGraph g = keyframe_graph(map, {}, window);
+  ASSERT_EQ(g.num_edges(), size_t(K - 1 + K - 2));
+  for (size_t k = K - 1; k < g.num_edges(); ++k) EXPECT_EQ(g.edges()[k].kind, PoseGraphEdgeKind::odometry);
+  PoseGraphOptions o;
+  const PoseGraphResult res = g.optimize(o);
+  ASSERT_TRUE(res.ok()) << res.message;
+
+  // The linear least squares over x_1 .. x_{K-1}.
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(2 * K - 3, K - 1);
+  Eigen::VectorXd b(2 * K - 3);
+  int row = 0;
+  auto add = [&](int from, int to, double measured, double weight) {
+    const double w = std::sqrt(weight);
+    if (to > 0) A(row, to - 1) += w;
+    if (from > 0) A(row, from - 1) -= w;
+    b(row++) = w * measured;
+  };
+  for (int i = 1; i < K; ++i) add(i - 1, i, d + e, lambda + 1.0);
+  for (int i = 2; i < K; ++i) add(i - 2, i, 2 * d, lambda);
+  const Eigen::VectorXd x = A.colPivHouseholderQr().solve(b);
+  for (int i = 1; i < K; ++i) {
+    const SE3& T = res.T_world_node[size_t(i)];
+    // Levenberg-Marquardt stops at Ceres' relative tolerances (1e-6 of the cost's decrease), short of the exact
+    // minimum by far less than 10 um: 0.5 % of the 2 mm bias per step this is about.
+    EXPECT_NEAR(T.translation().x(), x(i - 1), 1e-5) << i;
+    EXPECT_NEAR(T.translation().tail<2>().norm(), 0.0, 1e-9) << i;
+    EXPECT_NEAR(T.angle_rad(), 0.0, 1e-9) << i;
+  }
+  // The middle step's error is the infinite chain's e (lambda + 1) / (5 lambda + 1) (the ends' influence decays
+  // geometrically: 1 % is reached within the 7 steps from either end), and the end's drift is below half the
+  // chain's (K - 1) e.
+  const double middle = res.T_world_node[K / 2].translation().x() - res.T_world_node[K / 2 - 1].translation().x();
+  EXPECT_NEAR(middle - d, e * (lambda + 1) / (5 * lambda + 1), 0.01 * e / 5);
+  EXPECT_LT(res.T_world_node[K - 1].translation().x() - d * (K - 1), 0.5 * (K - 1) * e);
+
+  // The tracked steps join beside the registered chain when asked for, with their information per frame times the
+  // scale (plus the floor).
+  const PoseGraph tracked = keyframe_graph(map, {}, window, 0.5);
+  ASSERT_EQ(tracked.num_edges(), g.num_edges() + size_t(K - 1));
+  size_t with_tracked = 0;
+  for (const PoseGraphEdge& edge : tracked.edges())
+    if (std::abs(edge.information(0, 0) - (0.5 * lambda / 10.0 + 1.0)) < 1e-9) ++with_tracked;
+  EXPECT_EQ(with_tracked, size_t(K - 1));
+}
+
 TEST(FusedFrames, MovedFramesAreReFusedMostChangedFirst) {
   const PinholeCamera cam = PinholeCamera::preset("ros").scaled(3);  // 80x60
   fusion::VolumeParams vp;
