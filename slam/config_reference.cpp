@@ -40,6 +40,7 @@ std::vector<ConfigKey> make_reference() {
       row("backend", "", any(), "where the normal equations are reduced: cpu | opencl"),
       row("tracking_level", "", closed(0, 2), "pyramid level tracking starts at: 0 full, 1 half, 2 quarter"),
       row("constant_velocity", "", any(), "guess each motion as the last one (false: identity, KinectFusion)"),
+      row("velocity_by_time", "", any(), "scale the last motion by the frames' time stamps (covers dropped frames)"),
       row("wide_basin_without_prior", "", any(),
           "with no motion prior (after a loss): one more coarse level and the rotation-first step"),
       row("max_speed_m_per_s", "m/s", above(0), "a faster camera motion is a tracking failure"),

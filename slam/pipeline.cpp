@@ -249,6 +249,7 @@ FrameResult Pipeline::process_pinhole(const RgbdFrame& frame, FrameResult r) {
   // After a loss or a relocalisation the motion spans several frames: no prior for the next one, not a wrong one.
   motion_prior_ = lost_spell_ == 0 && v.state != TrackState::relocalised;
   velocity_ = motion_prior_ ? T_prev.inverse() * v.T_world_cur : SE3();
+  velocity_dt_s_ = frame.timestamp_s - last_time_s_;
   T_world_cur_ = v.T_world_cur;
   last_time_s_ = frame.timestamp_s;
   lost_spell_ = 0;
@@ -333,6 +334,12 @@ void Pipeline::initialise(const RgbdFrame& frame, FramePyramid& current, FrameRe
 Pipeline::Verdict Pipeline::track(const FramePyramid& current, double timestamp_s, FrameResult* r) {
   const auto t0 = std::chrono::steady_clock::now();
   SE3 guess = config_.constant_velocity && lost_spell_ == 0 ? velocity_ : SE3();
+  if (config_.constant_velocity && config_.velocity_by_time && lost_spell_ == 0 && motion_prior_) {
+    // The last motion over this frame's interval; stamps out of order or missing keep the per-frame motion.
+    const double ratio = (timestamp_s - last_time_s_) / velocity_dt_s_;
+    if (std::isfinite(ratio) && velocity_dt_s_ > 1e-4 && ratio > 0.0 && std::fabs(ratio - 1.0) > 1e-6)
+      guess = SE3::exp(std::min(ratio, 5.0) * velocity_.log());
+  }
   // Without a measured motion the identity may be far from the truth: the wide basin (wide_basin_without_prior).
   Registration* primary = wide_ && !(motion_prior_ && lost_spell_ == 0) ? wide_.get() : registration_.get();
   std::optional<RegistrationResult> seed;  // seed_registration's estimate on this frame

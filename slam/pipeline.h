@@ -343,6 +343,7 @@ class Pipeline {
   };
   std::vector<Anchor> anchors_;
   SE3 velocity_;          // T_prev_cur of the last accepted frame pair
+  double velocity_dt_s_ = 0.0;  // the sensor time velocity_ spans
   bool motion_prior_ = false;  // velocity_ is a measured motion (not the identity after a start, loss or relocalisation)
   long lost_spell_ = 0;   // consecutive lost frames up to now
   size_t frames_ = 0, lost_ = 0;

@@ -225,6 +225,7 @@ void visit_scalars(V&& v, PipelineConfig& c) {
   v("backend", c.backend);
   v("tracking_level", c.tracking_level);
   v("constant_velocity", c.constant_velocity);
+  v("velocity_by_time", c.velocity_by_time);
   v("wide_basin_without_prior", c.wide_basin_without_prior);
   v("max_speed_m_per_s", c.max_speed_m_per_s);
   v("max_angular_speed_deg_per_s", c.max_angular_speed_deg_per_s);

@@ -86,6 +86,10 @@ struct PipelineConfig {
   // Motion prior: the initial guess of T_ref_cur is the last inter-frame motion (constant velocity) when true, the
   // identity (KinectFusion) when false. Never used right after a lost frame.
   bool constant_velocity = true;
+  // The constant velocity is per second of sensor time, not per frame: the last motion is scaled by the ratio of
+  // this frame's interval to the last pair's (at most 5), so after dropped frames the guess covers the gap. Where
+  // the stamps are a frame counter (7-Scenes) the ratio is 1.
+  bool velocity_by_time = false;
   // Where the pipeline has no motion prior (the frame after initialisation, a lost frame or a relocalisation: the
   // guess is the identity, and the motion since the reference is unknown and may be large), the primary runs with
   // a wider basin: one coarser pyramid level and the rotation-first step (pipeline_wide_basin_options). On pairs of

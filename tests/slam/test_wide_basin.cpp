@@ -35,11 +35,13 @@ struct Gap {
 };
 
 // Frames 0, gap, gap + 1 of `preset`: frame gap is tracked from the identity against the model of frame 0.
-Gap run_gap(const std::string& preset, int gap, bool wide, bool seed) {
+Gap run_gap(const std::string& preset, int gap, bool wide, bool seed, bool velocity_by_time = false) {
   auto source = std::make_unique<test::ModifiedSource>(
       datasets::open_synthetic(preset, test::half_res(preset, gap + 2)), [](RgbdFrame&) {},
       [gap](const RgbdFrame& f) { return f.index > 0 && f.index < size_t(gap); });
-  Pipeline pipeline(at_half_res(wide, seed), source->camera());
+  PipelineConfig config = at_half_res(wide, seed);
+  config.velocity_by_time = velocity_by_time;
+  Pipeline pipeline(config, source->camera());
   std::vector<FrameResult> out;
   std::vector<SE3> gt;
   for (FrameRead r = source->next(); r.status == FrameStatus::ok; r = source->next()) {
@@ -111,6 +113,22 @@ TEST(WideBasin, TheSeedCrossChecksAFrameWithoutAPrior) {
   EXPECT_LT(position_error_m(g.after, g.gt_after), 0.003);
 }
 
+// PipelineConfig::velocity_by_time: the frame after the 24-frame gap has the gap's motion as its prior, 24 times
+// the one frame it moved; per frame, the tracker starts 24 frames' motion (~9 degrees) away and the seed has to
+// place it, per second of the stamps it starts at the frame's own motion and converges by itself.
+TEST(VelocityByTime, ThePriorAfterAGapIsTheMotionOverTheFrameInterval) {
+  const Gap per_frame = run_gap("room", 24, true, true, false);
+  const Gap by_time = run_gap("room", 24, true, true, true);
+  ASSERT_EQ(by_time.first.state, TrackState::tracked);
+  EXPECT_EQ(by_time.after.state, TrackState::tracked) << by_time.after.message;
+  EXPECT_FALSE(by_time.after.seeded_on_failure);
+  EXPECT_LT(position_error_m(by_time.after, by_time.gt_after), 0.003);
+  EXPECT_LT(rotation_error_deg(by_time.after, by_time.gt_after), 0.1);
+  std::printf("after the gap, per frame: %s, seeded %d; by time: %s, seeded %d\n", to_string(per_frame.after.state),
+              int(per_frame.after.seeded_on_failure), to_string(by_time.after.state),
+              int(by_time.after.seeded_on_failure));
+}
+
 TEST(WideBasin, ConfigReadsWritesIt) {
   PipelineConfig c;
   EXPECT_TRUE(c.wide_basin_without_prior);  // the default
@@ -118,6 +136,8 @@ TEST(WideBasin, ConfigReadsWritesIt) {
   EXPECT_FALSE(config_from_json(config_to_json(c), "test").wide_basin_without_prior);
   EXPECT_FALSE(config_from_json(nlohmann::json{{"wide_basin_without_prior", false}}, "test").wide_basin_without_prior);
   EXPECT_THROW(config_from_json(nlohmann::json{{"wide_basin_without_prior", "yes"}}, "test"), Error);
+  EXPECT_FALSE(c.velocity_by_time);  // the default (bench/results/accuracy/large_motion.md)
+  EXPECT_TRUE(config_from_json(nlohmann::json{{"velocity_by_time", true}}, "test").velocity_by_time);
 }
 
 }  // namespace
