@@ -31,6 +31,7 @@
 #include "head/head_features.h"
 #include "io/mesh_file.h"
 #include "io/ply.h"
+#include "tests/common/sanitizer.h"
 
 namespace hf::head {
 namespace {
@@ -294,6 +295,7 @@ TEST(HeadReconstruction, FusedControlPointsMatchTheSource) {
 // the fins the flap test took for ears before ear_implausible (seed 0 at 2 / 2.5 / 3 mm, seed 18) lie 2.76 .. 3.38 rho from
 // it (bench/results/head.md), the fused ears it now keeps at 2 mm 0.54 and 1.04.
 TEST(HeadReconstruction, FusedEarsAreAbsentOrOnTheSourceEar) {
+  HF_RELEASE_ONLY_ACCURACY("HeadReconstruction.FusedControlPointsMatchTheSource and OneRingAtThePapersScales");
   if (!std::filesystem::exists(kMesh)) GTEST_SKIP() << kMesh << " is absent (../shared not mounted)";
   const TriangleMesh source = read_mesh_file(kMesh);
   // 2 mm: both ears found, formerly on fins 32 / 38 voxels off; 2.5 mm and seed 18: one fin each, now rejected.
