@@ -16,6 +16,7 @@
 #include "mesh/topology.h"
 #include "io/obj.h"
 #include "io/ply.h"
+#include "tests/common/sanitizer.h"
 
 namespace hf::head {
 namespace {
@@ -125,6 +126,7 @@ std::string area_of(const std::string& name) {
 TEST_P(RealHead, SymmetricOrderedAndStableUnderSimilarity) {
   const HeadCase& hc = GetParam();
   if (!std::filesystem::exists(kDir + hc.file)) GTEST_SKIP() << kDir << hc.file << " not found (../shared absent)";
+  if (hc.physical) HF_RELEASE_ONLY_ACCURACY("HeadMeshes/RealHead.* (the same detection at the paper's scales)");
   const TriangleMesh mesh = load(hc.file);
   HeadFeatureOptions options;
   options.automatic = true;
