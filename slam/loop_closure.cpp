@@ -97,24 +97,18 @@ PoseGraph keyframe_graph(const std::vector<Keyframe>& keyframes, const std::vect
     e.kind = PoseGraphEdgeKind::odometry;
     g.add_edge(e);
   }
-  for (const LoopEdge& w : window) {
-    PoseGraphEdge e;
-    e.from = w.from;
-    e.to = w.to;
-    e.T_from_to = w.T_from_to;
-    e.information = w.information;
-    e.kind = PoseGraphEdgeKind::odometry;
-    g.add_edge(e);
-  }
-  for (const LoopEdge& l : loops) {
+  // Window edges weigh as odometry (no robust loss, never pruned by the loop consistency test); loops as loops.
+  const auto add_registered = [&g](const LoopEdge& l, PoseGraphEdgeKind kind) {
     PoseGraphEdge e;
     e.from = l.from;
     e.to = l.to;
     e.T_from_to = l.T_from_to;
     e.information = l.information;
-    e.kind = PoseGraphEdgeKind::loop;
+    e.kind = kind;
     g.add_edge(e);
-  }
+  };
+  for (const LoopEdge& w : window) add_registered(w, PoseGraphEdgeKind::odometry);
+  for (const LoopEdge& l : loops) add_registered(l, PoseGraphEdgeKind::loop);
   return g;
 }
 
