@@ -35,6 +35,7 @@
 #include "io/dataset.h"
 #include "registration/frame_pyramid.h"
 #include "registration/registration.h"
+#include "registration/so3_prealign.h"
 #include "slam/pipeline_config.h"
 
 namespace {
@@ -61,7 +62,7 @@ hf::RegistrationOptions variant_options(hf::RegistrationOptions o, const std::st
   o.driver.iterations = {10, 5, 4};
   while (int(o.driver.iterations.size()) < levels) o.driver.iterations.push_back(4);
   o.driver.so3_iterations.clear();
-  if (variant.find("so3") != std::string::npos) o.driver.so3_iterations = {10, 5};
+  if (variant.find("so3") != std::string::npos) o.driver.so3_iterations = hf::wide_basin_so3_iterations();
   return o;
 }
 

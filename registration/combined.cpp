@@ -9,6 +9,7 @@
 #include "registration/cpu_backend_avx2.h"
 #include "registration/gauss_newton.h"
 #include "registration/kernels/combined_kernel.h"
+#include "registration/so3_prealign.h"
 
 namespace hf {
 namespace {
@@ -220,7 +221,7 @@ class CombinedMethod final : public DenseMethod {
 RegistrationOptions combined_defaults() {
   GaussNewtonOptions driver;
   driver.iterations = {10, 5, 4, 4, 4};
-  driver.so3_iterations = {10, 5};
+  driver.so3_iterations = wide_basin_so3_iterations();
   return RegistrationOptions(driver, std::make_unique<CombinedOptions>());
 }
 

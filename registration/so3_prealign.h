@@ -34,4 +34,9 @@ struct So3PrealignResult {
 So3PrealignResult so3_prealign(const FramePyramid& current, const FramePyramid& reference,
                                const Eigen::Matrix3d& R_initial, const std::vector<int>& iterations, int levels);
 
+// GaussNewtonOptions::so3_iterations wherever the wide basin is on (combined's align() defaults, the SLAM pipeline's
+// frames without a motion prior, bench_pairs' "so3" variants): 10 and 5 on the two coarsest levels, chosen on TUM
+// fr1/rpy 0-149 pairs (bench/results/accuracy/large_motion.md).
+inline std::vector<int> wide_basin_so3_iterations() { return {10, 5}; }
+
 }  // namespace hf

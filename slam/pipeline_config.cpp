@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/number_text.h"
 #include "registration/reduction.h"
+#include "registration/so3_prealign.h"
 #include "slam/config_reference.h"
 #include "slam/appearance.h"
 
@@ -299,7 +300,7 @@ RegistrationOptions pipeline_wide_basin_options(RegistrationOptions o) {
   std::vector<int>& it = o.driver.iterations;
   it.push_back(it.empty() ? 4 : std::max(4, it.back()));
   // so3_prealign reads intensity: a depth-only method skips it (gauss_newton.cpp), so setting it is harmless.
-  o.driver.so3_iterations = {10, 5};
+  o.driver.so3_iterations = wide_basin_so3_iterations();
   return o;
 }
 
@@ -331,20 +332,14 @@ void PipelineConfig::validate() const {
       throw Error("unknown registration method '" + registration + "' (known: " + known + ")");
     }
   }
-  if (!fallback_registration.empty()) {
+  // The optional methods beside the primary: empty = none, else a registry name.
+  for (const auto& [key, method] : {std::pair<const char*, const std::string*>{"fallback_registration",
+                                                                               &fallback_registration},
+                                    {"seed_registration", &seed_registration},
+                                    {"seed_on_failure", &seed_on_failure}}) {
     const auto names = registration_names();
-    if (std::find(names.begin(), names.end(), fallback_registration) == names.end())
-      throw Error("unknown fallback_registration '" + fallback_registration + "'");
-  }
-  if (!seed_registration.empty()) {
-    const auto names = registration_names();
-    if (std::find(names.begin(), names.end(), seed_registration) == names.end())
-      throw Error("unknown seed_registration '" + seed_registration + "'");
-  }
-  if (!seed_on_failure.empty()) {
-    const auto names = registration_names();
-    if (std::find(names.begin(), names.end(), seed_on_failure) == names.end())
-      throw Error("unknown seed_on_failure '" + seed_on_failure + "'");
+    if (!method->empty() && std::find(names.begin(), names.end(), *method) == names.end())
+      throw Error(std::string("unknown ") + key + " '" + *method + "'");
   }
   if (!(seed_min_motion_m >= 0.0) || !(seed_min_motion_deg >= 0.0) || !std::isfinite(seed_min_motion_m) ||
       !std::isfinite(seed_min_motion_deg))
