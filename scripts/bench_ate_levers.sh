@@ -11,8 +11,8 @@
 #           key of the hand-over sdf, e.g. sdfkey:robust_sdf:student_t), key:KEY:VALUE (a top-level key of the
 #           configuration, e.g. key:wide_basin_without_prior:false), window:N:SCALE[:TRACK] (keyframe window
 #           edges to the N-1 keyframes before the previous one, information times SCALE, the tracked keyframe steps
-#           kept with information times TRACK, 0 when left out: loop_closure.window_*), rcmw:W (the tracking
-#           raycast's raycast.min_weight W: surfaces seen fewer than W times are not tracked against)
+#           kept with information times TRACK, 0 when left out: loop_closure.window_*), skey:SECTION.KEY:VALUE (a
+#           key of a section, e.g. skey:volume.voxel_m:0.008), rcmw:W (the tracking raycast's raycast.min_weight W: surfaces seen fewer than W times are not tracked against)
 # e.g. HF_BIN=/tmp/hf bash scripts/bench_ate_levers.sh out/levers "rpy0_149 7s0_99" "off trunc:3:0.5"
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -43,6 +43,8 @@ for key in $inputs; do
         key) [[ "$b" =~ ^(-?[0-9.]+|true|false)$ ]] || b="\"$b\""
              parts+=("{\"$a\": $b}") ;;
         rcmw) parts+=("{\"raycast\": {\"min_weight\": $a}}") ;;
+        skey) IFS=: read -r _ path value <<< "$one"  # skey:SECTION.KEY:VALUE, e.g. skey:volume.voxel_m:0.008
+              parts+=("{\"${path%%.*}\": {\"${path#*.}\": $value}}") ;;
         wdepth) parts+=("{\"integrate\": {\"weight_depth_ref_m\": $a}}") ;;
         trunc) parts+=("{\"integrate\": {\"truncation_depth_ref_m\": $a, \"truncation_min_fraction\": $b}}") ;;
         window) IFS=: read -r _ n scale track <<< "$one"  # window:N:SCALE[:TRACK]
