@@ -40,6 +40,7 @@ struct BenchCliOptions {
   float ndt_resolution_m = 0.2f;
   int peer_pixel_stride = 2;
   std::string config_file;
+  std::string camera;  // --camera PRESET|FILE: every input's camera (default: chosen per dataset, 'ros' for synthetic)
   int tracking_level = -1;
   std::string shard;      // --shard K/N: slice K of N of the runs (bench/harness/harness.h)
   bool list_runs = false;  // --list-runs: print the runs, one per line, and run nothing
@@ -107,6 +108,7 @@ void run_bench_command(const BenchCliOptions& c) {
   o.voxel_m = c.voxel_m;
   o.backend = c.backend;
   o.config_file = c.config_file;
+  o.camera = c.camera;
   o.tracking_level = c.tracking_level;
   o.max_frames = c.max_frames;
   o.synthetic_frames = c.synthetic_frames;
@@ -176,6 +178,8 @@ void add_bench_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--backend", opts->backend, "reduction backend: cpu | opencl")->capture_default_str();
   cmd->add_option("--config", opts->config_file, "JSON pipeline configuration shared by every run (see hashfusion run)");
+  cmd->add_option("--camera", opts->camera,
+                  "camera preset name or camera file for every input (default: chosen per dataset; synthetic: ros)");
   cmd->add_option("--tracking-level", opts->tracking_level,
                   "pyramid level tracking starts at (0 full, 1 half resolution); default: the configuration's")
       ->check(tracking_level_range());
@@ -215,6 +219,7 @@ void add_bench_command(CLI::App& app) {
             quote_arg(opts->backend) + " --max-frames " + std::to_string(opts->max_frames) +
             " --synthetic-frames " + std::to_string(opts->synthetic_frames);
     if (!opts->config_file.empty()) line += " --config " + quote_arg(opts->config_file);
+    if (!opts->camera.empty()) line += " --camera " + quote_arg(opts->camera);
     if (!opts->shard.empty()) line += " --shard " + quote_arg(opts->shard);
     if (opts->tracking_level >= 0) line += " --tracking-level " + std::to_string(opts->tracking_level);
     if (opts->seed != 0) line += " --seed " + std::to_string(opts->seed);

@@ -58,9 +58,11 @@ void set_frame_rpe(RunRow& row, const Trajectory& gt, const Trajectory& estimate
   row.rpe_frame_rot_deg = rpe.rot_deg.rmse;
 }
 
-// The input's frames as a FrameSource; synthetic inputs read their rendered TUM folder.
-std::unique_ptr<FrameSource> open_input(const std::string& folder) {
-  return open_dataset(folder);
+// The input's frames as a FrameSource, with --camera where given; synthetic inputs read their rendered TUM folder.
+std::unique_ptr<FrameSource> open_input(const std::string& folder, const BenchOptions& o) {
+  DatasetOptions d;
+  d.camera = o.camera;
+  return open_dataset(folder, d);
 }
 
 // What the tables show as the source: the dataset reader's name, or the preset for a rendered synthetic input
@@ -78,7 +80,7 @@ RunRow run_method(const BenchInput& input, const std::string& folder, const std:
   row.input = input.label;
   const auto start = std::chrono::steady_clock::now();
   try {
-    std::unique_ptr<FrameSource> source = open_input(folder);
+    std::unique_ptr<FrameSource> source = open_input(folder, o);
     row.source = source_name(input, *source);
     slam::PipelineConfig config = o.config_file.empty() ? slam::PipelineConfig{} : slam::load_config(o.config_file);
     // Each registration is measured as itself: the colour check (slam/colour_check.h), which hands a method that
@@ -130,7 +132,7 @@ RunRow run_peer_row(const BenchInput& input, const std::string& folder, const st
   row.input = input.label;
   const auto start = std::chrono::steady_clock::now();
   try {
-    std::unique_ptr<FrameSource> source = open_input(folder);
+    std::unique_ptr<FrameSource> source = open_input(folder, o);
     row.source = source_name(input, *source);
     const PeerRun run = run_peer(*source, peer, o.peer, o.max_frames, o.stop,
                                  o.progress ? input.label + " " + peer + " (peer)" : "");
@@ -179,6 +181,7 @@ std::string render_synthetic(const BenchInput& input, const std::string& cache_r
   s.preset = input.spec.substr(std::string(datasets::kSyntheticPrefix).size());
   s.frames = o.max_frames > 0 ? int(std::min<long>(o.max_frames, o.synthetic_frames)) : o.synthetic_frames;
   s.seed = o.seed;
+  if (!o.camera.empty()) s.camera = camera_from_option(o.camera).camera;
   const datasets::SyntheticSequence sequence(s);
   const std::string dir = cache_root + "/" + file_safe(s.preset);
   datasets::TumWriteOptions w;
@@ -194,14 +197,17 @@ std::string render_synthetic(const BenchInput& input, const std::string& cache_r
 }
 
 std::string settings_line(const BenchOptions& o) {
-  char buffer[512];
-  std::snprintf(buffer, sizeof buffer,
-                "voxel %.4g m, backend %s, max frames %s, synthetic presets rendered with %d frames (640x480 'ros' "
+  const std::string camera = o.camera.empty() ? "per dataset" : "'" + o.camera + "'";
+  std::vector<char> buffer(512 + camera.size());  // a camera file's path has no bound
+  std::snprintf(buffer.data(), buffer.size(),
+                "voxel %.4g m, backend %s, max frames %s, camera %s, synthetic presets rendered with %d frames (%s "
                 "camera, sensor noise on, seed %llu), peers voxel grid %.3g m, NDT cells %.3g m, pixel stride %d",
                 o.voxel_m, o.backend.c_str(), o.max_frames > 0 ? std::to_string(o.max_frames).c_str() : "all",
+                camera.c_str(),
                 o.max_frames > 0 ? int(std::min<long>(o.max_frames, o.synthetic_frames)) : o.synthetic_frames,
+                o.camera.empty() ? "640x480 'ros'" : "that",
                 static_cast<unsigned long long>(o.seed), double(o.peer.voxel_m), double(o.peer.ndt_resolution_m), o.peer.pixel_stride);
-  return buffer;
+  return buffer.data();
 }
 
 // The speed-vs-error plots (overall and per input) of `results` into `out`; returns their file names.
@@ -264,6 +270,7 @@ BenchReport run_bench(const BenchOptions& o) {
     check.backend = o.backend;
     check.volume.voxel_m = o.voxel_m;
     check.validate();
+    if (!o.camera.empty()) camera_from_option(o.camera);  // an unknown preset or a malformed file: one line, now
   }
   const DiscoveredInputs discovered = discover_inputs(o.inputs);
   // The slice of the runs this process makes (--shard K/N; everything by default): run number `unit` counts the

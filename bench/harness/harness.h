@@ -40,6 +40,9 @@ struct BenchOptions {
   // The pipeline settings every run shares (slam::load_config form); empty: the defaults. registration, backend and
   // voxel_m above override the file's; a file's registration_options apply only to the method the file names.
   std::string config_file;
+  // Every input's camera, a preset name or a camera file (io/dataset.h DatasetOptions::camera); empty: each dataset's
+  // own choice, and synthetic presets render with 640x480 'ros'. Checked before any run (camera_from_option).
+  std::string camera;
   int tracking_level = -1;                 // >= 0 overrides the config's tracking_level
   long max_frames = 0;                     // per run, 0 = all
   int synthetic_frames = 300;              // frames rendered per synthetic preset (at most max_frames when set)

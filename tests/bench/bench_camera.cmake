@@ -1,0 +1,38 @@
+# hashfusion bench --camera: every input read with the camera given. A TUM folder rendered at 160x120 and left without
+# its camera file reads as the 'ros' preset (640x480) unless --camera names the 160x120 calibration: with it the run
+# tracks every frame, without it the run fails on the image size; the settings line names the camera.
+set(frames 3)
+set(cam ${DIR}/bench_camera_160x120.txt)
+set(in ${DIR}/bench_camera_input)
+file(REMOVE_RECURSE ${in} ${DIR}/bench_camera_with ${DIR}/bench_camera_without)
+file(WRITE ${cam} "fx 131.25\nfy 131.25\ncx 79.5\ncy 59.5\nwidth 160\nheight 120\n")
+execute_process(COMMAND ${HASHFUSION} generate --preset wall --frames ${frames} --camera ${cam} --out ${in}
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "generate failed (${rc}): ${err}")
+endif()
+file(REMOVE ${in}/camera.json)
+foreach(mode with without)
+  set(args)
+  if(mode STREQUAL "with")
+    set(args --camera ${cam})
+  endif()
+  execute_process(COMMAND ${HASHFUSION} bench --input ${in} --registration icp --peers none --max-frames ${frames}
+                          ${args} --out ${DIR}/bench_camera_${mode}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  file(READ ${DIR}/bench_camera_${mode}/results.json json)
+  string(JSON status GET "${json}" runs 0 status)
+  string(JSON run_frames GET "${json}" runs 0 frames)
+  string(JSON settings GET "${json}" settings)
+  if(mode STREQUAL "with")
+    if(NOT rc EQUAL 0 OR NOT status STREQUAL "ok" OR NOT run_frames EQUAL frames)
+      message(FATAL_ERROR "with --camera: exit ${rc}, status ${status}, ${run_frames} frames: ${err}")
+    endif()
+    string(FIND "${settings}" "camera '${cam}'" at)
+    if(at EQUAL -1)
+      message(FATAL_ERROR "the settings do not name the camera: ${settings}")
+    endif()
+  elseif(status STREQUAL "ok")
+    message(FATAL_ERROR "without --camera the 160x120 frames were read with a 160x120 camera: the test shows nothing")
+  endif()
+endforeach()
