@@ -66,11 +66,12 @@ std::unique_ptr<FrameSource> open_input(const std::string& folder, const BenchOp
 }
 
 // What the tables show as the source: the dataset reader's name, or the preset for a rendered synthetic input
-// (whose temporary folder means nothing to a reader).
+// (whose temporary folder means nothing to a reader), and the camera the frames were read with.
 std::string source_name(const BenchInput& input, const FrameSource& source) {
-  if (!input.synthetic) return source.name();
+  const std::string camera = "; camera " + source.camera().describe();
+  if (!input.synthetic) return source.name() + camera;
   return "synthetic preset '" + input.spec.substr(std::string(datasets::kSyntheticPrefix).size()) + "', " +
-         std::to_string(source.size()) + " frames rendered (datasets/presets.h) and read back as a TUM folder";
+         std::to_string(source.size()) + " frames rendered (datasets/presets.h) and read back as a TUM folder" + camera;
 }
 
 RunRow run_method(const BenchInput& input, const std::string& folder, const std::string& method,

@@ -1,11 +1,12 @@
-# hashfusion bench --camera: every input read with the camera given. A TUM folder rendered at 160x120 and left without
-# its camera file reads as the 'ros' preset (640x480) unless --camera names the 160x120 calibration: with it the run
-# tracks every frame, without it the run fails on the image size; the settings line names the camera.
+# hashfusion bench --camera: every input read with the camera given. A TUM folder rendered with a wide 160x120 camera
+# (fx 80) and left without its camera file reads as the 'ros' preset (640x480), so every frame is bad (wrong size),
+# unless --camera names the calibration: then every frame is tracked. Each run's source names the camera it was read
+# with, and the settings line names --camera.
 set(frames 3)
 set(cam ${DIR}/bench_camera_160x120.txt)
 set(in ${DIR}/bench_camera_input)
 file(REMOVE_RECURSE ${in} ${DIR}/bench_camera_with ${DIR}/bench_camera_without)
-file(WRITE ${cam} "fx 131.25\nfy 131.25\ncx 79.5\ncy 59.5\nwidth 160\nheight 120\n")
+file(WRITE ${cam} "fx 80\nfy 80\ncx 79.5\ncy 59.5\nwidth 160\nheight 120\n")
 execute_process(COMMAND ${HASHFUSION} generate --preset wall --frames ${frames} --camera ${cam} --out ${in}
                 RESULT_VARIABLE rc ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
@@ -24,15 +25,25 @@ foreach(mode with without)
   string(JSON status GET "${json}" runs 0 status)
   string(JSON run_frames GET "${json}" runs 0 frames)
   string(JSON settings GET "${json}" settings)
+  string(JSON source GET "${json}" runs 0 source)
+  string(JSON bad GET "${json}" runs 0 frames_bad)
   if(mode STREQUAL "with")
-    if(NOT rc EQUAL 0 OR NOT status STREQUAL "ok" OR NOT run_frames EQUAL frames)
-      message(FATAL_ERROR "with --camera: exit ${rc}, status ${status}, ${run_frames} frames: ${err}")
+    if(NOT rc EQUAL 0 OR NOT status STREQUAL "ok" OR NOT run_frames EQUAL frames OR NOT bad EQUAL 0)
+      message(FATAL_ERROR "with --camera: exit ${rc}, status ${status}, ${run_frames} frames, ${bad} bad: ${err}")
     endif()
     string(FIND "${settings}" "camera '${cam}'" at)
     if(at EQUAL -1)
       message(FATAL_ERROR "the settings do not name the camera: ${settings}")
     endif()
-  elseif(status STREQUAL "ok")
-    message(FATAL_ERROR "without --camera the 160x120 frames were read with a 160x120 camera: the test shows nothing")
+    set(want "camera fx=80 fy=80 cx=79.5 cy=59.5 160x120")
+  else()
+    if(NOT bad EQUAL frames)
+      message(FATAL_ERROR "without --camera ${bad} of ${frames} frames were bad: read with another camera than ros")
+    endif()
+    set(want "camera fx=525 fy=525 cx=319.5 cy=239.5 640x480")
+  endif()
+  string(FIND "${source}" "${want}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "${mode} --camera: the run's source does not say '${want}': ${source}")
   endif()
 endforeach()
