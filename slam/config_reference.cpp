@@ -74,7 +74,7 @@ std::vector<ConfigKey> make_reference() {
       row("raycast.min_weight", "", at_least(0), "voxels of a smaller weight count as unobserved"),
       row("raycast.refine_tol_vox", "voxels", open_closed(0, 1), "the zero crossing is refined to this"),
       // pyramid (registration/frame_pyramid.h)
-      row("pyramid.levels", "", closed(1, 6), "pyramid levels registration runs on"),
+      row("pyramid.levels", "", closed(1, 6), "pyramid levels registration runs on (at most; one iteration count each)"),
       row("pyramid.bilateral_filter", "", any(), "bilateral filter on the finest depth (KinectFusion eq. 2)"),
       row("pyramid.max_depth_m", "m", at_least(0), "depth beyond this is dropped (0: keep all)"),
       row("pyramid.min_depth_m", "m", at_least(0), "depth below this is dropped"),

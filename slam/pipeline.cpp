@@ -145,11 +145,11 @@ Pipeline::Pipeline(const PipelineConfig& config, const PinholeCamera& camera)
     fallback_ = make_registration(config_.fallback_registration, fo, make_backend(config_.backend));
   }
   if (!config_.seed_registration.empty()) {
-    RegistrationOptions so = pipeline_registration_options(config_.seed_registration);
+    RegistrationOptions so = pipeline_registration_options(config_.seed_registration, config_.pyramid.levels);
     seed_ = make_registration(config_.seed_registration, so, make_backend(config_.backend));
   }
   if (!config_.seed_on_failure.empty()) {
-    RegistrationOptions so = pipeline_registration_options(config_.seed_on_failure);
+    RegistrationOptions so = pipeline_registration_options(config_.seed_on_failure, config_.pyramid.levels);
     failure_seed_ = make_registration(config_.seed_on_failure, so, make_backend(config_.backend));
   }
   if (config_.relocalisation.enabled)
@@ -281,7 +281,8 @@ void Pipeline::check_colour(const FramePyramid& current, FrameResult* r) {
   if (!decided || colour_check_.verdict() != ColourVerdict::unregistered) return;
   RegistrationOptions o = config_.depth_only_registration_options
                              ? *config_.depth_only_registration_options
-                             : pipeline_registration_options(config_.colour_check.depth_only_registration);
+                             : pipeline_registration_options(config_.colour_check.depth_only_registration,
+                                                             config_.pyramid.levels);
   o.driver.iterations = registration_->options().driver.iterations;
   registration_ = make_registration(config_.colour_check.depth_only_registration, o, make_backend(config_.backend));
   if (wide_)

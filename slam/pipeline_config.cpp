@@ -284,15 +284,16 @@ nlohmann::json migrate_registration_options(const nlohmann::json& j, const Regis
 
 }  // namespace
 
-RegistrationOptions pipeline_registration_options(const std::string& method) {
+RegistrationOptions pipeline_registration_options(const std::string& method, int levels) {
   RegistrationOptions o = default_registration_options(method);
   o.set("rgb_weight", kPipelineRgbWeight);  // methods without photometric rows have no such knob
   // A registry default's wide basin for guess-free pairs (combined: rotation-first, 5 levels) is not the
   // pipeline's: it tracks from a motion prior, where they cost time and no accuracy (bench/results/accuracy/
-  // large_motion.md), at the depth of its own pyramid.
+  // large_motion.md), at the depth of the configured pyramid (not the default one: a 4-level pyramid tracks on 4
+  // levels where the method's defaults have them).
   o.driver.so3_iterations.clear();
-  const size_t levels = size_t(PipelineConfig{}.pyramid.levels);
-  if (o.driver.iterations.size() > levels) o.driver.iterations.resize(levels);
+  const size_t n = size_t(std::max(1, levels));
+  if (o.driver.iterations.size() > n) o.driver.iterations.resize(n);
   return o;
 }
 
@@ -314,7 +315,7 @@ RegistrationOptions registration_options_from_json(const std::string& method, co
 
 RegistrationOptions effective_registration_options(const PipelineConfig& c) {
   if (c.registration_options) return *c.registration_options;
-  return pipeline_registration_options(c.registration);
+  return pipeline_registration_options(c.registration, c.pyramid.levels);
 }
 
 
@@ -448,7 +449,7 @@ PipelineConfig pipeline_config_from_json_unnamed(const nlohmann::json& j, const 
     section_from_json(j["reintegration"], where + ": reintegration", c.reintegration);
   if (j.contains("colour_check")) section_from_json(j["colour_check"], where + ": colour_check", c.colour_check);
   if (j.contains("depth_only_registration_options") && !j["depth_only_registration_options"].is_null()) {
-    RegistrationOptions r = pipeline_registration_options(c.colour_check.depth_only_registration);
+    RegistrationOptions r = pipeline_registration_options(c.colour_check.depth_only_registration, c.pyramid.levels);
     section_from_json(j["depth_only_registration_options"], where + ": depth_only_registration_options", r);
     c.depth_only_registration_options = r;
   }

@@ -155,9 +155,11 @@ PipelineConfig parse_config(const std::string& text, const std::string& name);
 inline constexpr double kPipelineRgbWeight = 0.4;
 
 // A method's options as the pipeline runs it: its defaults, with rgb_weight = kPipelineRgbWeight where it has one,
-// without the registry's wide-basin settings for guess-free pairs (no rotation-first step, at most the default
-// pyramid's levels: the pipeline tracks from a motion prior; bench/results/accuracy/large_motion.md).
-RegistrationOptions pipeline_registration_options(const std::string& method);
+// without the registry's wide-basin settings for guess-free pairs (no rotation-first step: the pipeline tracks from
+// a motion prior; bench/results/accuracy/large_motion.md) and at most `levels` iteration counts, one per level of
+// the pipeline's pyramid (PipelineConfig::pyramid.levels; the registry's defaults for guess-free pairs may hold
+// more). Never more levels than the registry gives: for some methods a count is a resolution of their own.
+RegistrationOptions pipeline_registration_options(const std::string& method, int levels = FramePyramidOptions{}.levels);
 // The options the pipeline tracks with where it has no motion prior (PipelineConfig::wide_basin_without_prior),
 // from those it tracks with otherwise: one coarser level (its iterations the coarsest's, at least 4) and, for a
 // method reading colour, the rotation-first step on the two coarsest levels (10 and 5 iterations, combined's
@@ -168,7 +170,8 @@ RegistrationOptions pipeline_wide_basin_options(RegistrationOptions tracking);
 // validated. hf::Error naming `where` and the key for an unknown key, a wrong type or a value out of range.
 RegistrationOptions registration_options_from_json(const std::string& method, const nlohmann::json& j,
                                                    const std::string& where);
-// The registration options in force: registration_options when set, else pipeline_registration_options().
+// The registration options in force: registration_options when set, else pipeline_registration_options() for the
+// configured pyramid's levels.
 RegistrationOptions effective_registration_options(const PipelineConfig& config);
 
 }  // namespace hf::slam

@@ -409,6 +409,29 @@ TEST(PipelineConfig, RgbWeightHasOneHome) {
                    ["registration_options"].contains("rgb_weight"));
 }
 
+// pyramid.levels is the depth registration runs at: the method's own counts cut to it (combined's registry default
+// has five, for guess-free pairs), never lengthened (a count may be a method's own resolution, as NDT's); a count
+// list given in registration_options is kept as written.
+TEST(PipelineConfig, TrackingLevelsFollowThePyramid) {
+  auto iterations = [](const nlohmann::json& j) {
+    return effective_registration_options(config_from_json(j, "c.json")).driver.iterations;
+  };
+  EXPECT_EQ(iterations({{"registration", "combined"}}), (std::vector<int>{10, 5, 4}));
+  EXPECT_EQ(iterations({{"registration", "combined"}, {"pyramid", {{"levels", 4}}}}),
+            (std::vector<int>{10, 5, 4, 4}));
+  EXPECT_EQ(iterations({{"registration", "combined"}, {"pyramid", {{"levels", 2}}}}), (std::vector<int>{10, 5}));
+  EXPECT_EQ(iterations({{"registration", "icp"}, {"pyramid", {{"levels", 5}}}}), (std::vector<int>{10, 5, 4}));
+  EXPECT_EQ(iterations({{"registration", "combined"},
+                        {"pyramid", {{"levels", 4}}},
+                        {"registration_options", {{"iterations", {8, 4}}}}}),
+            (std::vector<int>{8, 4}));
+  // The hand-over tracker's options follow the same pyramid.
+  const PipelineConfig c = config_from_json(
+      {{"pyramid", {{"levels", 2}}}, {"depth_only_registration_options", {{"huber_sdf_m", 0.005}}}}, "c.json");
+  ASSERT_TRUE(c.depth_only_registration_options);
+  EXPECT_EQ(c.depth_only_registration_options->driver.iterations, (std::vector<int>{20, 10}));
+}
+
 // report.json files written before methods owned their knobs keep reading: their registration_options hold every
 // method's keys (the former RegistrationOptions' visitor, all defaults but t_dof 7 and max_dist_m 0.2), which each
 // method renames or drops by registration's rule (migrate_registration_key).
