@@ -134,7 +134,8 @@ struct GaussNewtonOptions {
   // Rotation-first alignment (registration/so3_prealign.h, ElasticFusion's SO(3) step) for methods that read
   // colour: Gauss-Newton iterations of the photometric rotation-only fit on the coarsest pyramid levels before the
   // dense solve, [0] for the coarsest; empty = off. The driver's default is off; combined's registry defaults turn
-  // it on for align() (wide_basin_so3_iterations(), so3_prealign.h), the SLAM pipeline's settings off (bench/results/accuracy/large_motion.md).
+  // it on for align() (wide_basin_so3_iterations(), so3_prealign.h), the SLAM pipeline's settings off
+  // (bench/results/accuracy/large_motion.md).
   std::vector<int> so3_iterations;
 
   void visit(OptionVisitor& v);

@@ -12,7 +12,8 @@
 #           configuration, e.g. key:wide_basin_without_prior:false), window:N:SCALE[:TRACK] (keyframe window
 #           edges to the N-1 keyframes before the previous one, information times SCALE, the tracked keyframe steps
 #           kept with information times TRACK, 0 when left out: loop_closure.window_*), skey:SECTION.KEY:VALUE (a
-#           key of a section, e.g. skey:volume.voxel_m:0.008), rcmw:W (the tracking raycast's raycast.min_weight W: surfaces seen fewer than W times are not tracked against)
+#           key of a section, e.g. skey:volume.voxel_m:0.008), rcmw:W (the tracking raycast's raycast.min_weight
+#           W: surfaces seen fewer than W times are not tracked against)
 # e.g. HF_BIN=/tmp/hf bash scripts/bench_ate_levers.sh out/levers "rpy0_149 7s0_99" "off trunc:3:0.5"
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."

@@ -159,11 +159,12 @@ inline constexpr double kPipelineRgbWeight = 0.4;
 // a motion prior; bench/results/accuracy/large_motion.md) and at most `levels` iteration counts, one per level of
 // the pipeline's pyramid (PipelineConfig::pyramid.levels; the registry's defaults for guess-free pairs may hold
 // more). Never more levels than the registry gives: for some methods a count is a resolution of their own.
-RegistrationOptions pipeline_registration_options(const std::string& method, int levels = FramePyramidOptions{}.levels);
+RegistrationOptions pipeline_registration_options(const std::string& method,
+                                                  int levels = FramePyramidOptions{}.levels);
 // The options the pipeline tracks with where it has no motion prior (PipelineConfig::wide_basin_without_prior),
 // from those it tracks with otherwise: one coarser level (its iterations the coarsest's, at least 4) and, for a
-// method reading colour, the rotation-first step on the two coarsest levels (10 and 5 iterations, combined's
-// registry default). The caller builds the frame and model pyramids with the extra level.
+// method reading colour, the rotation-first step on the two coarsest levels (wide_basin_so3_iterations(), as
+// combined's registry default). The caller builds the frame and model pyramids with the extra level.
 RegistrationOptions pipeline_wide_basin_options(RegistrationOptions tracking);
 // A registry method's options from a JSON object of its keys (as report.json's "registration_options"): the
 // method's registry defaults (default_registration_options, not the pipeline's) overridden by the keys present,
