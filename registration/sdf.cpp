@@ -38,7 +38,16 @@ int sdf_pixel(int x, int y, const hf_reg_maps* maps, hf_intrinsics K, hf_transfo
   if (!hf_sdf_locate(x, y, maps, K, T, p, &v, cell, frac)) return 0;
   const float* raw = sampler.cell_corners(cell[0], cell[1], cell[2]);
   if (raw == nullptr) return 0;
-  return hf_sdf_row(raw, frac, v, p, row);
+  float weight = 0.0f;
+  if (p.confidence_weight_raw > 0.0f) {
+    int least = 1 << 30;
+    for (int c = 0; c < 8; ++c) {
+      const fusion::Voxel* vx = sampler.voxel(cell[0] + (c & 1), cell[1] + ((c >> 1) & 1), cell[2] + (c >> 2));
+      least = std::min(least, vx != nullptr ? int(vx->weight) : 0);
+    }
+    weight = float(least);
+  }
+  return hf_sdf_row(raw, frac, v, p, weight, row);
 }
 
 // The cpu backend's loop over rows [y0, y1): one sampler (block cache) per call, the calls run concurrently.
@@ -137,6 +146,7 @@ class SdfMethod final : public DenseMethod {
       : options_(options), table_(flat_, true), pool_(flat_, false) {
     params_.k.max_abs_sdf = options.max_abs_sdf;
     params_.k.depth_noise_ref_m = options.depth_noise_ref_m;
+    params_.k.confidence_weight_raw = options.confidence_weight * HF_WEIGHT_SCALE;
     params_.min_voxel_weight = options.min_voxel_weight;
     // VolumeSampler's rule: weight 0 (never observed) is always unobserved.
     params_.k.min_weight_raw = std::max(1, int(hf_quantise_weight(std::max(0.0f, options.min_voxel_weight))));
@@ -238,6 +248,7 @@ void SdfOptions::visit(OptionVisitor& v) {
   v("t_sigma_sdf_m", t_sigma_sdf_m);
   v("t_dof_sdf", t_dof_sdf);
   v("depth_noise_ref_m", depth_noise_ref_m);
+  v("confidence_weight", confidence_weight);
   v("own_voxel_m", own_voxel_m);
   v("own_truncation_vox", own_truncation_vox);
 }
@@ -251,6 +262,8 @@ void SdfOptions::validate() const {
   require_option(finite_positive(t_dof_sdf), "t_dof_sdf must be finite and > 0");
   require_option(std::isfinite(depth_noise_ref_m) && depth_noise_ref_m >= 0.0f,
                  "depth_noise_ref_m must be finite and >= 0");
+  require_option(std::isfinite(confidence_weight) && confidence_weight >= 0.0f && confidence_weight <= 4096.0f,
+                 "confidence_weight must be in [0, 4096]");
   require_option(own_voxel_m > 0.0 && own_voxel_m <= 1.0, "own_voxel_m must be in (0, 1] metres");
   require_option(own_truncation_vox >= 1.0 && own_truncation_vox <= 64.0, "own_truncation_vox must be in [1, 64]");
 }

@@ -47,6 +47,10 @@ struct SdfOptions : MethodOptionsBase<SdfOptions> {
   // sees its distance scaled by (ref / z)^2. 0: every row alike, the default (measured through the pipeline's
   // hand-over on 7-Scenes: bench/results/accuracy/ate_levers.md).
   float depth_noise_ref_m = 0.0f;
+  // The model's confidence in the residual (issue 34, item 4): a row weighed by min(1, w / confidence_weight), w
+  // the fewest observations of its cell's eight voxels (TSDF weight units), so surfaces seen once or twice pull
+  // less than settled ones. 0: off, the default.
+  float confidence_weight = 0.0f;
   // The volume the method fuses the reference into when no map was set (pairwise use). 6 voxels, not the map's 4:
   // on the noisy room pair of tests/registration/test_accuracy.cpp 2.81 vs 3.08 mm at finest_level_step 1 (2.67
   // mm at 2; the wider band averages a one-frame field over more depth); 5 mm voxels halve the basin and miss the

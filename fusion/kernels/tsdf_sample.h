@@ -24,8 +24,11 @@ typedef struct {
 
 // The raw sdf (the int16 as float, VolumeSampler::cell_corners' values) of cell (i, j, k)'s eight corners into
 // f[8]; 1 when every corner is observed (weight >= min_weight_raw, which is >= 1: a missing block's voxels are
-// never observed), else 0 (f then holds what was read so far).
-HF_INLINE int hf_tsdf_cell(const hf_flat_map* map, int i, int j, int k, int min_weight_raw, float* f) {
+// never observed), else 0 (f then holds what was read so far). *least_weight_raw: the smallest raw weight of the
+// eight (valid when 1 is returned).
+HF_INLINE int hf_tsdf_cell_weighted(const hf_flat_map* map, int i, int j, int k, int min_weight_raw, float* f,
+                                    int* least_weight_raw) {
+  int least = 0x7fffffff;
   // The corners span at most 2 x 2 x 2 blocks; most cells lie inside one, so remember the last block looked up.
   int last_bx = 0, last_by = 0, last_bz = 0, slot = -1, have = 0;
   for (int c = 0; c < 8; ++c) {
@@ -42,8 +45,16 @@ HF_INLINE int hf_tsdf_cell(const hf_flat_map* map, int i, int j, int k, int min_
                                                            vk - HF_BLOCK_SIZE * bz)];
     if ((int)v.weight < min_weight_raw) return 0;
     f[c] = (float)v.sdf;
+    least = (int)v.weight < least ? (int)v.weight : least;
   }
+  *least_weight_raw = least;
   return 1;
+}
+
+// The same without the weight (the raycast's gathers).
+HF_INLINE int hf_tsdf_cell(const hf_flat_map* map, int i, int j, int k, int min_weight_raw, float* f) {
+  int least;
+  return hf_tsdf_cell_weighted(map, i, j, k, min_weight_raw, f, &least);
 }
 
 // The trilinear normalised sdf of a cell's raw corners f[8] at fractional offset (a, b, c) in [0, 1)^3, and its

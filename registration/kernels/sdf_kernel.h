@@ -5,6 +5,7 @@
 //   q = T_world_ref v        in the map; p = q / voxel_m - 1/2 in continuous voxel coordinates
 //   r = D(q) = mu d(p)       d: the trilinear normalised TSDF of p's cell, mu the truncation distance (metres)
 //   dr/dv = R_world_ref^T (mu / voxel_m) grad d       grad d: the analytic gradient of the same cell
+//   weight: the robust kernel's, times the optional depth-noise scale and model confidence (SdfOptions)
 //
 // A pixel gives a row only where its vertex is valid, its cell's eight voxels are observed and |d| < max_abs_sdf
 // (in the truncated band the field is flat: no gradient, and its value is a bound, not a distance).
@@ -34,6 +35,7 @@ typedef struct {
   int table_shift;
   int table_max_probe;
   float depth_noise_ref_m;     // 0: off; else rows scaled by s = min(1, ref / z)^2, z = v.z (hf_reg_depth_noise_scale)
+  float confidence_weight_raw; // 0: off; else rows weighed by min(1, w / this), w the cell's least raw voxel weight
 } hf_sdf_params;
 
 // Step one: the moved vertex *v = T vc and its cell in the map (cell[3], fractional offsets frac[3]); 0 when the
@@ -55,8 +57,10 @@ HF_INLINE int hf_sdf_locate(int x, int y, const hf_reg_maps* maps, hf_intrinsics
   return 1;
 }
 
-// Step two, from the cell's raw corners (hf_tsdf_cell / VolumeSampler::cell_corners): the row, or 0.
-HF_INLINE int hf_sdf_row(const float* raw, const float* frac, hf_float4 v, hf_sdf_params p, hf_reg_row* row) {
+// Step two, from the cell's raw corners (hf_tsdf_cell / VolumeSampler::cell_corners) and the least raw weight of
+// its eight voxels (read only when p.confidence_weight_raw > 0): the row, or 0.
+HF_INLINE int hf_sdf_row(const float* raw, const float* frac, hf_float4 v, hf_sdf_params p, float cell_weight_raw,
+                         hf_reg_row* row) {
   hf_float4 g;
   const float d = hf_trilinear_gradient(raw, frac[0], frac[1], frac[2], &g);
   if (!(hf_fabs(d) < p.max_abs_sdf)) return 0;
@@ -71,7 +75,11 @@ HF_INLINE int hf_sdf_row(const float* raw, const float* frac, hf_float4 v, hf_sd
   // The depth noise (SdfOptions::depth_noise_ref_m): z is the vertex's depth in the reference camera, which the
   // motion between two frames leaves within millimetres of its measured depth. s = 1 when off: the same bits.
   const float sc = hf_reg_depth_noise_scale(p.depth_noise_ref_m, v.z);
-  hf_reg_set_row(v, a, r, sc * sc * hf_reg_term_weight(p.robust, sc * r), row);
+  // The model's confidence (SdfOptions::confidence_weight): a cell whose least-seen voxel was observed w times
+  // counts w / ref of a settled one. 1 when off: the same bits.
+  const float ratio = p.confidence_weight_raw > 0.0f ? cell_weight_raw / p.confidence_weight_raw : 1.0f;
+  const float conf = ratio < 1.0f ? ratio : 1.0f;
+  hf_reg_set_row(v, a, r, conf * sc * sc * hf_reg_term_weight(p.robust, sc * r), row);
   return 1;
 }
 
@@ -89,8 +97,9 @@ HF_INLINE int hf_sdf_pixel(int x, int y, const hf_reg_maps* maps, hf_intrinsics 
   map.shift = p.table_shift;
   map.max_probe = p.table_max_probe;
   float raw[8];
-  if (!hf_tsdf_cell(&map, cell[0], cell[1], cell[2], p.min_weight_raw, raw)) return 0;
-  return hf_sdf_row(raw, frac, v, p, rows);
+  int least = 0;
+  if (!hf_tsdf_cell_weighted(&map, cell[0], cell[1], cell[2], p.min_weight_raw, raw, &least)) return 0;
+  return hf_sdf_row(raw, frac, v, p, (float)least, rows);
 }
 
 HF_REG_OPENCL_KERNEL(sdf, hf_sdf_pixel, hf_sdf_params)

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 #include "core/error.h"
 #include "datasets/synthetic_sequence.h"
@@ -103,9 +104,12 @@ TEST(SdfRegistration, EmptyMapAndNoMapGiveAStatus) {
 TEST(SdfRegistration, TheFlatMapGivesTheHostGridsRows) {
   MapCase m = make_map_case(true);
   long ungated_rows = 0;
-  for (const float min_weight : {0.0f, 3.0f}) {
+  double ungated_weight = 0.0;
+  // (min_voxel_weight, confidence_weight): off, the gate, the model's confidence.
+  for (const auto& [min_weight, confidence] : {std::pair{0.0f, 0.0f}, {3.0f, 0.0f}, {0.0f, 6.0f}}) {
     RegistrationOptions options = default_registration_options("sdf");
     options.set("min_voxel_weight", double(min_weight));
+    options.set("confidence_weight", double(confidence));
     options.set("finest_level_step", 1);
     test::MethodUnderTest method = test::method_under_test("sdf", options, make_backend("cpu"));
     method.registration->set_volume(&m.grid, m.T_world_ref);
@@ -120,26 +124,35 @@ TEST(SdfRegistration, TheFlatMapGivesTheHostGridsRows) {
     const hf_reg_maps host_maps = p.kernel_maps();
     const hf_sdf_params params = *static_cast<const hf_sdf_params*>(p.params);
     long rows = 0, differ = 0;
+    double weight = 0.0;
     for (int y = 0; y < p.height(); ++y) {
       for (int x = 0; x < p.width(); ++x) {
         hf_reg_row a{}, b{};
         const int na = p.kernel->pixel(x, y, &host_maps, p.camera, p.T_ref_cur, p.params, &a);
         const int nb = hf_sdf_pixel(x, y, &flat_maps, p.camera, p.T_ref_cur, params, &b);
         rows += na;
+        weight += na == 1 ? a.w : 0.0f;
         differ += na != nb || (na == 1 && std::memcmp(&a, &b, sizeof a) != 0);
       }
     }
-    EXPECT_GT(rows, 20000) << "min weight " << min_weight;
-    EXPECT_EQ(differ, 0) << "min weight " << min_weight << ": of " << rows << " rows";
+    EXPECT_GT(rows, 20000) << "min weight " << min_weight << ", confidence " << confidence;
+    EXPECT_EQ(differ, 0) << "min weight " << min_weight << ", confidence " << confidence << ": of " << rows << " rows";
     // A table sized for fewer blocks than the grid holds (the grid grew after the kernel's parameters were set) is
     // refused, as is one that is not a power of two.
     EXPECT_THROW(fusion::flatten(m.grid, 16), Error);
     EXPECT_THROW(fusion::flatten(m.grid, 3 * fusion::flat_table_entries(m.grid.block_count())), Error);
-    // The weight gate removes rows (the edges of the map saw fewer than 3 frames), on both paths alike.
-    if (min_weight == 0.0f) {
+    // The weight gate removes rows (the edges of the map saw fewer than 3 frames), on both paths alike; the
+    // confidence keeps every row and lowers the weight of those whose cell was seen fewer than 6 times (8 frames
+    // fused: the map's edges).
+    if (min_weight == 0.0f && confidence == 0.0f) {
       ungated_rows = rows;
-    } else {
+      ungated_weight = weight;
+    } else if (min_weight > 0.0f) {
       EXPECT_LT(rows, ungated_rows);
+    } else {
+      EXPECT_EQ(rows, ungated_rows);
+      EXPECT_LT(weight, ungated_weight);
+      EXPECT_GT(weight, 0.5 * ungated_weight);
     }
   }
 }
@@ -164,9 +177,9 @@ TEST(SdfRegistration, DepthNoiseWeightScalesRowsAsRefOverZSquared) {
       const hf_float4 v = hf_make_float4(0.01f, -0.02f, z, 1.0f);
       hf_reg_row off{}, on{};
       p.depth_noise_ref_m = 0.0f;
-      ASSERT_EQ(hf_sdf_row(raw, frac, v, p, &off), 1);
+      ASSERT_EQ(hf_sdf_row(raw, frac, v, p, 0.0f, &off), 1);
       p.depth_noise_ref_m = 1.5f;
-      ASSERT_EQ(hf_sdf_row(raw, frac, v, p, &on), 1);
+      ASSERT_EQ(hf_sdf_row(raw, frac, v, p, 0.0f, &on), 1);
       EXPECT_NEAR(off.r, d_mid * 0.04f, 1e-5f);
       if (z <= 1.5f) {
         EXPECT_EQ(std::memcmp(&off, &on, sizeof off), 0) << z;
@@ -181,6 +194,45 @@ TEST(SdfRegistration, DepthNoiseWeightScalesRowsAsRefOverZSquared) {
       EXPECT_NEAR(on.w, s * s * huber_on, 1e-7f) << "d " << d_mid << " z " << z;
     }
   }
+}
+
+// The model's confidence (SdfOptions::confidence_weight, raw units in the kernel: HF_WEIGHT_SCALE per observation)
+// on one cell: a row whose cell's least-seen voxel has weight w < ref keeps its Jacobian and residual and takes
+// w / ref of the weight it has without the option; at w >= ref, and with the option off, the row is bit for bit the
+// unweighted one.
+TEST(SdfRegistration, ConfidenceWeighsRowsByTheCellsLeastWeight) {
+  hf_sdf_params p{};
+  p.T_world_ref = to_transform12(SE3());
+  p.inv_voxel_m = 100.0f;
+  p.mu_m = 0.04f;
+  p.max_abs_sdf = 0.9f;
+  p.robust = robust_params(RobustKernel::huber, 0.01f, 0.01f, 5.0f);
+  const float frac[3] = {0.5f, 0.5f, 0.5f};
+  float raw[8];
+  for (int c = 0; c < 8; ++c) raw[c] = std::round((0.5f + ((c >> 2) ? 0.1f : -0.1f)) * HF_SDF_SCALE);
+  const hf_float4 v = hf_make_float4(0.01f, -0.02f, 1.2f, 1.0f);
+  hf_reg_row off{};
+  ASSERT_EQ(hf_sdf_row(raw, frac, v, p, 16.0f, &off), 1);  // option off: the cell weight is not read
+  p.confidence_weight_raw = 10.0f * HF_WEIGHT_SCALE;
+  for (const float observations : {1.0f, 2.5f, 5.0f, 10.0f, 40.0f}) {
+    hf_reg_row on{};
+    ASSERT_EQ(hf_sdf_row(raw, frac, v, p, observations * HF_WEIGHT_SCALE, &on), 1);
+    EXPECT_EQ(std::memcmp(off.J, on.J, sizeof off.J), 0);
+    EXPECT_EQ(off.r, on.r);
+    if (observations >= 10.0f) {
+      EXPECT_EQ(std::memcmp(&off, &on, sizeof off), 0) << observations;
+    } else {
+      EXPECT_NEAR(on.w, off.w * observations / 10.0f, 1e-7f) << observations;
+    }
+  }
+  // The option is validated.
+  RegistrationOptions options = default_registration_options("sdf");
+  for (const double bad : {-1.0, std::nan(""), 1e6}) {
+    ASSERT_TRUE(options.set("confidence_weight", bad));
+    EXPECT_THROW(options.validate(), Error) << bad;
+  }
+  ASSERT_TRUE(options.set("confidence_weight", 10.0));
+  EXPECT_NO_THROW(options.validate());
 }
 
 }  // namespace
