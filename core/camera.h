@@ -72,7 +72,8 @@ struct PinholeCamera {
   bool operator==(const PinholeCamera&) const = default;
 
   // Named presets: "fr1", "fr2", "fr3" (TUM RGB-D, from the TUM web page; fr1 and fr2 with their published
-  // k1 k2 p1 p2 k3, since their images are stored distorted), "ros" (525, 525, 319.5, 239.5),
+  // k1 k2 p1 p2 k3, since their images are stored distorted), "fr1-registered" (532, 532, 309.5, 250: fr1's
+  // stored images as one pinhole, estimated from fr1/rpy against its reference), "ros" (525, 525, 319.5, 239.5),
   // "icl-nuim" (481.2, 480, 319.5, 239.5: the TUM-format release of ICL-NUIM, whose y axis is already flipped),
   // "7scenes" (585, 585, 320, 240). Throws hf::Error on an unknown name listing the known ones.
   static PinholeCamera preset(const std::string& name);

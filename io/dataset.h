@@ -4,9 +4,10 @@
 //   1. options.camera: a preset name (PinholeCamera::preset_names()) or the path of a camera file;
 //   2. camera.json, else camera.txt, inside the folder (PinholeCamera::load format);
 //   3. the TUM camera the folder's name identifies: "freiburg1" or "fr1" as a separate word (delimited by
-//      non-alphanumerics, case-insensitive), likewise fr2 and fr3. fr3 -> the fr3 preset; fr1 and fr2 -> the "ros"
-//      preset, because their images are distorted and the depth is pre-registered to them, for which TUM recommends
-//      the ROS defaults over undistortion (and it measures better: see io/dataset.cpp);
+//      non-alphanumerics, case-insensitive), likewise fr2 and fr3. fr3 -> the fr3 preset; fr1 -> "fr1-registered"
+//      and fr2 -> "ros": their images are distorted and the depth is pre-registered to them, which TUM recommends
+//      reading as a pinhole (the ROS defaults) rather than undistorting; for fr1 the pinhole that tracks its
+//      recordings best is measured (see io/dataset.cpp);
 //   4. the "ros" preset (525, 525, 319.5, 239.5).
 // 7-Scenes: options.camera, else camera-intrinsics.txt in the folder (3x3 K, size 640x480), else "7scenes".
 // The choice and the reason are kept as CameraChoice::origin, a string the reports print.

@@ -103,12 +103,16 @@ TEST(Camera, ScaledLevels) {
 
 TEST(Camera, PresetsAndUnknownPreset) {
   const auto names = PinholeCamera::preset_names();
-  EXPECT_EQ(names.size(), 6u);
+  EXPECT_EQ(names.size(), 7u);
   for (const auto& n : names) EXPECT_NO_THROW(PinholeCamera::preset(n)) << n;
   const PinholeCamera fr1 = PinholeCamera::preset("fr1");
   EXPECT_DOUBLE_EQ(fr1.fx, 517.3);
   EXPECT_DOUBLE_EQ(fr1.cy, 255.3);
   EXPECT_DOUBLE_EQ(PinholeCamera::preset("7scenes").fx, 585.0);
+  const PinholeCamera fr1_registered = PinholeCamera::preset("fr1-registered");
+  EXPECT_DOUBLE_EQ(fr1_registered.fx, 532.0);
+  EXPECT_DOUBLE_EQ(fr1_registered.cx, 309.5);
+  EXPECT_TRUE(fr1_registered.distortion.none());
   EXPECT_DOUBLE_EQ(PinholeCamera::preset("icl-nuim").fx, 481.2);
   try {
     PinholeCamera::preset("fr4");

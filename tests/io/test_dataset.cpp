@@ -126,9 +126,11 @@ TEST(DatasetOpen, OpensBothFormatsWithAndWithoutPrefetch) {
     std::unique_ptr<hf::FrameSource> source = hf::open_dataset(tum, options);
     EXPECT_EQ(dynamic_cast<hf::PrefetchingSource*>(source.get()) != nullptr, prefetch > 0);
     EXPECT_EQ(source->size(), 3u);
-    // fr1 in the name: the ROS defaults (distorted images, pre-registered depth; see io/dataset.h), said why.
-    EXPECT_EQ(source->camera(), hf::PinholeCamera::preset("ros"));
-    EXPECT_TRUE(contains(source->camera_origin(), "fr1"));
+    // fr1 in the name: the pinhole measured on fr1 (distorted images, pre-registered depth; see io/dataset.h),
+    // said why.
+    EXPECT_EQ(source->camera(), hf::PinholeCamera::preset("fr1-registered"));
+    EXPECT_TRUE(contains(source->camera_origin(), "preset fr1-registered (folder name")) << source->camera_origin();
+    EXPECT_TRUE(contains(source->camera_origin(), "is TUM fr1")) << source->camera_origin();
     EXPECT_TRUE(contains(source->name(), "TUM RGB-D"));
     for (size_t i = 0; i < 3; ++i) {
       const hf::FrameRead r = source->next();

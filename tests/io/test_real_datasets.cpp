@@ -60,7 +60,7 @@ TEST(RealData, TumFr1RpyFirst150) {
   EXPECT_EQ(s.frames_with_gt, s.frames);  // "every rgb/depth timestamp has a groundtruth pose within 5 ms"
   EXPECT_LE(s.max_gt_distance_s, 0.005);
   EXPECT_LE(s.max_rgb_depth_difference_s, 0.0115);  // "rgb->nearest-depth association within 11.5 ms"
-  EXPECT_EQ(data.camera(), hf::PinholeCamera::preset("ros"));  // fr1 from the folder name: ROS defaults
+  EXPECT_EQ(data.camera(), hf::PinholeCamera::preset("fr1-registered"));  // fr1 from the folder name
   EXPECT_DOUBLE_EQ(data.frames().front().timestamp_s, 1305031229.528748);
   EXPECT_DOUBLE_EQ(data.frames().back().timestamp_s, 1305031234.493831);
   expect_plausible_frame(data.read(0), 0.3, 10.0);
@@ -82,7 +82,7 @@ TEST(RealData, TumFr1Desk9Frames) {
   ASSERT_NE(tum, nullptr);
   EXPECT_EQ(tum->summary().frames_with_gt, 9u);
   EXPECT_LE(tum->summary().max_gt_distance_s, 0.005);
-  EXPECT_EQ(source->camera(), hf::PinholeCamera::preset("ros"));
+  EXPECT_EQ(source->camera(), hf::PinholeCamera::preset("fr1-registered"));
   // Decode the first two through the prefetching wrapper, then stop early.
   for (size_t i = 0; i < 2; ++i) {
     const hf::FrameRead r = source->next();
