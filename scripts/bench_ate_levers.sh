@@ -65,25 +65,4 @@ print(json.dumps(c))' "${parts[@]}" > "$work/c.json"
   done
 done
 
-python3 - "$out" <<'PY'
-import json, os, sys
-out = sys.argv[1]
-rows = []
-for run in sorted(os.listdir(os.path.join(out, "runs"))):
-    p = os.path.join(out, "runs", run, "report.json")
-    if not os.path.isfile(p):
-        continue
-    j = json.load(open(p))
-    key, mode = run.split("__", 1)
-    ate = j.get("ate_rmse_m")
-    rows.append({"input": key, "mode": mode, "frames": j["frames"], "lost": j["frames_lost"],
-                 "ate_cm": None if ate is None else 100 * ate,
-                 "tracking": j.get("colour_check", {}).get("tracking_registration")})
-json.dump(rows, open(os.path.join(out, "levers.json"), "w"), indent=1)
-with open(os.path.join(out, "levers.md"), "w") as md:
-    md.write("| input | mode | frames | lost | tracked by | ATE cm |\n|---|---|---|---|---|---|\n")
-    for r in rows:
-        ate = "-" if r["ate_cm"] is None else f"{r['ate_cm']:.3f}"
-        md.write(f"| {r['input']} | {r['mode']} | {r['frames']} | {r['lost']} | {r['tracking']} | {ate} |\n")
-print(open(os.path.join(out, "levers.md")).read())
-PY
+bench_ate_table levers mode

@@ -31,24 +31,4 @@ for key in $inputs; do
   done
 done
 
-python3 - "$out" <<'PY'
-import json, os, sys
-out = sys.argv[1]
-rows = []
-for run in sorted(os.listdir(os.path.join(out, "runs"))):
-    p = os.path.join(out, "runs", run, "report.json")
-    if not os.path.isfile(p):
-        continue
-    j = json.load(open(p))
-    key, cam = run.split("__", 1)
-    ate = j.get("ate_rmse_m")
-    rows.append({"input": key, "camera": cam.replace("_", " "), "frames": j["frames"], "lost": j["frames_lost"],
-                 "ate_cm": None if ate is None else 100 * ate})
-json.dump(rows, open(os.path.join(out, "intrinsics.json"), "w"), indent=1)
-with open(os.path.join(out, "intrinsics.md"), "w") as f:
-    f.write("| input | camera (fx = fy, cx, cy or preset) | frames | lost | ATE cm |\n|---|---|---|---|---|\n")
-    for r in rows:
-        ate = "-" if r["ate_cm"] is None else "%.3f" % r["ate_cm"]
-        f.write(f"| {r['input']} | {r['camera']} | {r['frames']} | {r['lost']} | {ate} |\n")
-print(open(os.path.join(out, "intrinsics.md")).read())
-PY
+bench_ate_table intrinsics camera

@@ -5,6 +5,8 @@
 #                             # at exit); exits with one line when the binary or ../shared is missing
 #   bench_run RUN INPUT [ARGS...]   # hashfusion run --input INPUT --out $out/runs/RUN ARGS, its log beside it;
 #                                   # a failed run is reported and the script goes on (its row is then absent)
+#   bench_ate_table NAME COLUMN     # $out/NAME.{json,md} from every $out/runs/INPUT__VARIANT/report.json: input,
+#                                   # VARIANT under the heading COLUMN, frames, lost, tracked by, ATE cm; printed
 bench_init() {
   bench_name="$1"
   out="$2"
@@ -64,4 +66,29 @@ bench_seven_scenes_halves() {
       ln -s -t "$d" "$seven/$f.color.jpg" "$seven/$f.depth.png" "$seven/$f.pose.txt"
     done
   done
+}
+
+bench_ate_table() {
+  python3 - "$out" "$1" "$2" <<'PY'
+import json, os, sys
+out, name, column = sys.argv[1:4]
+rows = []
+for run in sorted(os.listdir(os.path.join(out, "runs"))):
+    p = os.path.join(out, "runs", run, "report.json")
+    if not os.path.isfile(p):
+        continue
+    j = json.load(open(p))
+    key, variant = run.split("__", 1)
+    ate = j.get("ate_rmse_m")
+    rows.append({"input": key, column: variant, "frames": j["frames"], "lost": j["frames_lost"],
+                 "ate_cm": None if ate is None else 100 * ate,
+                 "tracking": j.get("colour_check", {}).get("tracking_registration")})
+json.dump(rows, open(os.path.join(out, name + ".json"), "w"), indent=1)
+with open(os.path.join(out, name + ".md"), "w") as md:
+    md.write(f"| input | {column} | frames | lost | tracked by | ATE cm |\n|---|---|---|---|---|---|\n")
+    for r in rows:
+        ate = "-" if r["ate_cm"] is None else f"{r['ate_cm']:.3f}"
+        md.write(f"| {r['input']} | {r[column]} | {r['frames']} | {r['lost']} | {r['tracking']} | {ate} |\n")
+print(open(os.path.join(out, name + ".md")).read())
+PY
 }

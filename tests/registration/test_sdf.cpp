@@ -157,18 +157,23 @@ TEST(SdfRegistration, TheFlatMapGivesTheHostGridsRows) {
   }
 }
 
-
-// The depth-noise weighting (SdfOptions::depth_noise_ref_m) on one cell of a field that rises along z: a row at depth
-// z beyond ref keeps its Jacobian and residual and takes the weight s^2 w(s r), s = (ref / z)^2, w the robust
-// kernel; at or nearer than ref the row is bit for bit the unweighted one. Distances 8 mm (inside Huber's 1 cm, so
-// the weight is s^2 alone) and 30 mm (Huber 1/3 unweighted, 1 once scaled by s = 1/4).
-TEST(SdfRegistration, DepthNoiseWeightScalesRowsAsRefOverZSquared) {
+// The kernel's parameters for the one-cell tests below: the map at the identity, 1 cm voxels, mu 4 cm, Huber 1 cm.
+hf_sdf_params one_cell_params() {
   hf_sdf_params p{};
   p.T_world_ref = to_transform12(SE3());
   p.inv_voxel_m = 100.0f;
   p.mu_m = 0.04f;
   p.max_abs_sdf = 0.9f;
   p.robust = robust_params(RobustKernel::huber, 0.01f, 0.01f, 5.0f);
+  return p;
+}
+
+// The depth-noise weighting (SdfOptions::depth_noise_ref_m) on one cell of a field that rises along z: a row at depth
+// z beyond ref keeps its Jacobian and residual and takes the weight s^2 w(s r), s = (ref / z)^2, w the robust
+// kernel; at or nearer than ref the row is bit for bit the unweighted one. Distances 8 mm (inside Huber's 1 cm, so
+// the weight is s^2 alone) and 30 mm (Huber 1/3 unweighted, 1 once scaled by s = 1/4).
+TEST(SdfRegistration, DepthNoiseWeightScalesRowsAsRefOverZSquared) {
+  hf_sdf_params p = one_cell_params();
   const float frac[3] = {0.5f, 0.5f, 0.5f};
   for (const float d_mid : {0.2f, 0.75f}) {
     float raw[8];  // corner c = x + 2 y + 4 z: d_mid -+ 0.1 on the near and far faces
@@ -201,12 +206,7 @@ TEST(SdfRegistration, DepthNoiseWeightScalesRowsAsRefOverZSquared) {
 // w / ref of the weight it has without the option; at w >= ref, and with the option off, the row is bit for bit the
 // unweighted one.
 TEST(SdfRegistration, ConfidenceWeighsRowsByTheCellsLeastWeight) {
-  hf_sdf_params p{};
-  p.T_world_ref = to_transform12(SE3());
-  p.inv_voxel_m = 100.0f;
-  p.mu_m = 0.04f;
-  p.max_abs_sdf = 0.9f;
-  p.robust = robust_params(RobustKernel::huber, 0.01f, 0.01f, 5.0f);
+  hf_sdf_params p = one_cell_params();
   const float frac[3] = {0.5f, 0.5f, 0.5f};
   float raw[8];
   for (int c = 0; c < 8; ++c) raw[c] = std::round((0.5f + ((c >> 2) ? 0.1f : -0.1f)) * HF_SDF_SCALE);
