@@ -13,7 +13,7 @@ the reference by more than --jump-mm: a step of the reference that two trackers 
 
 With --trajectory TRAJ (a `hashfusion run` trajectory.txt of the same frames) and --replace, each flagged step of the
 reference is replaced by TRAJ's own step there (the reference's poses after it moved rigidly by the difference) and
-the ATE (Umeyama, no scale; positions, as slam/eval.h) of TRAJ is printed against the reference as given and as
+the ATE (hf.ate: slam/eval's, Horn alignment, no scale) of TRAJ is printed against the reference as given and as
 mended: how much of TRAJ's error is that step of the reference.
 """
 import argparse
@@ -26,35 +26,6 @@ import hashfusion as hf
 
 def step_error_mm(T_ref_step, T_est_step):
     return 1000.0 * np.linalg.norm((np.linalg.inv(T_ref_step) @ T_est_step)[:3, 3])
-
-
-def read_tum(path):
-    rows = []
-    for line in open(path):
-        if line.startswith("#") or not line.strip():
-            continue
-        rows.append([float(x) for x in line.split()[:8]])
-    return np.array(rows)
-
-
-def pose(row):
-    x, y, z, w = row[4:8] / np.linalg.norm(row[4:8])
-    R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                  [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                  [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R, row[1:4]
-    return T
-
-
-def ate_cm(E, G):
-    me, mg = E.mean(0), G.mean(0)
-    U, _, Vt = np.linalg.svd((E - me).T @ (G - mg))
-    D = np.eye(3)
-    D[2, 2] = np.sign(np.linalg.det(Vt.T @ U.T))
-    R = Vt.T @ D @ U.T
-    err = np.linalg.norm((R @ E.T).T + (mg - R @ me) - G, axis=1)
-    return 100.0 * np.sqrt((err ** 2).mean())
 
 
 def main():
@@ -95,20 +66,19 @@ def main():
     if not flagged:
         print("no step of the reference is contradicted by both methods")
     if a.trajectory and a.replace:
-        est = read_tum(a.trajectory)
-        if len(est) != n:
-            sys.exit("reference_steps: %s has %d poses, the dataset %d frames" % (a.trajectory, len(est), n))
-        E = [pose(r) for r in est]
-        G = [np.array(T) for T in gt]
-        mended = list(G)
+        stamps, E = hf.read_trajectory(a.trajectory)
+        if len(E) != n:
+            sys.exit("reference_steps: %s has %d poses, the dataset %d frames" % (a.trajectory, len(E), n))
+        G = np.array([np.array(T) for T in gt])
+        mended = G.copy()
         for j in flagged:  # the reference after step j moved so that its step j is the trajectory's
             C = mended[j] @ np.linalg.inv(E[j]) @ E[j + 1] @ np.linalg.inv(mended[j + 1])
-            mended = mended[:j + 1] + [C @ T for T in mended[j + 1:]]
-        P = np.array([T[:3, 3] for T in E])
+            mended[j + 1:] = C @ mended[j + 1:]
+        # slam/eval's ATE (hf.ate: Horn alignment, no scale), the reference at the trajectory's own stamps.
+        before = hf.ate((stamps, G), (stamps, E))["ate_rmse_m"]
+        after = hf.ate((stamps, mended), (stamps, E))["ate_rmse_m"]
         print("ATE of %s: %.3f cm against the reference, %.3f cm with the flagged steps replaced"
-              % (a.trajectory, ate_cm(P, np.array([T[:3, 3] for T in G])),
-                 ate_cm(P, np.array([T[:3, 3] for T in mended]))))
-
+              % (a.trajectory, 100 * before, 100 * after))
 
 if __name__ == "__main__":
     main()
